@@ -1,0 +1,91 @@
+// The flat 4-wide BVH shared by the CPU and the GPU. A node holds, for each of its four
+// lanes (children), the child's bounds and what the child is: an inner node, a leaf (a run
+// of primitives in leaf order) or nothing. Expansion data (centre, radius, moments) lives in
+// separate arrays per order so that a query touches only what its order needs.
+// Views are trivially copyable and are what kernels receive; WideBvh owns the arrays.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+inline constexpr int kBvhWidth = 4;
+inline constexpr uint32_t kEmptyLane = 0xFFFFFFFFu;
+// A traversal holds at most (width - 1) entries per level plus one; the builder keeps trees
+// far shallower than this (median splits halve the largest part at every level).
+inline constexpr int kMaxBvhDepth = 40;
+inline constexpr int kTraversalStackSize = (kBvhWidth - 1) * kMaxBvhDepth + 1;
+
+// Lane i: count[i] == 0 and child[i] != kEmptyLane: inner node child[i];
+//         count[i] > 0: leaf with primitives [child[i], child[i] + count[i]) in leaf order;
+//         child[i] == kEmptyLane: unused.
+struct alignas(16) WideNode {
+  float lo[3][kBvhWidth];
+  float hi[3][kBvhWidth];
+  uint32_t child[kBvhWidth];
+  uint32_t count[kBvhWidth];
+};
+
+// Per lane: expansion centre p̄, radius r (no point of the cluster is farther than r from p̄)
+// and order-0 moment N.
+struct alignas(16) WideNodeExpansion {
+  float centre[3][kBvhWidth];
+  float radius[kBvhWidth];
+  float n[3][kBvhWidth];
+};
+struct alignas(16) WideNodeOrder1 {
+  float s[6][kBvhWidth];
+};
+struct alignas(16) WideNodeOrder2 {
+  float p[10][kBvhWidth];
+  float e[3][kBvhWidth];
+};
+
+struct BvhView {
+  const WideNode* nodes = nullptr;
+  uint32_t node_count = 0;
+};
+
+// The multipole tree over the mesh triangles.
+struct TriangleTreeView {
+  BvhView bvh;
+  const WideNodeExpansion* expansion = nullptr;
+  const WideNodeOrder1* order1 = nullptr;
+  const WideNodeOrder2* order2 = nullptr;
+  const vec3* vertices = nullptr;        // 3 per triangle, in leaf order
+  const uint32_t* triangle_ids = nullptr;  // leaf order -> input triangle index
+  uint32_t triangle_count = 0;
+};
+
+// The tree over the boundary curve ∂M (segments a -> b, one per unit of multiplicity).
+struct SegmentTreeView {
+  BvhView bvh;
+  const vec3* endpoints = nullptr;        // 2 per segment, in leaf order
+  const uint32_t* segment_ids = nullptr;  // leaf order -> boundary segment index
+  uint32_t segment_count = 0;
+};
+
+struct Aabb {
+  vec3 lo{3.4e38f};
+  vec3 hi{-3.4e38f};
+  GWNRT_HD void extend(const vec3& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+  GWNRT_HD void extend(const Aabb& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+  GWNRT_HD vec3 centre() const { return 0.5f * (lo + hi); }
+  GWNRT_HD bool valid() const { return lo.x <= hi.x; }
+};
+
+// Owning topology + bounds, built in parallel by median splits on primitive centroids.
+struct WideBvh {
+  std::vector<WideNode> nodes;
+  std::vector<uint32_t> primitive_order;  // leaf order -> input primitive index
+  uint32_t depth = 0;
+  BvhView view() const { return {nodes.data(), uint32_t(nodes.size())}; }
+};
+
+WideBvh build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size);
+
+}  // namespace gwnrt

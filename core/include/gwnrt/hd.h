@@ -1,0 +1,45 @@
+// Host-and-device foundation: the macro that marks a function as compiled for both the
+// CPU and the GPU, and the small vector vocabulary every numeric kernel shares.
+// This header (and every header it reaches) must stay free of TBB, Embree and OpenImageIO:
+// nvcc compiles it.
+#pragma once
+
+#include <cstdint>
+
+#if defined(__CUDACC__)
+#define GWNRT_HD __host__ __device__
+#define GWNRT_FORCEINLINE __forceinline__
+#else
+#define GWNRT_HD
+#define GWNRT_FORCEINLINE inline __attribute__((always_inline))
+#endif
+
+// GLM recognises nvcc on its own and marks its functions __host__ __device__.
+#include <glm/glm.hpp>
+
+namespace gwnrt {
+
+using vec3 = glm::vec3;
+using dvec3 = glm::dvec3;
+using uvec3 = glm::uvec3;
+
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr float kInv4Pi = float(0.25 / kPi);
+
+// Symmetric 3x3 matrix stored as its six independent entries (xx, xy, xz, yy, yz, zz).
+template <class T>
+struct Sym3 {
+  T xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  GWNRT_HD T trace() const { return xx + yy + zz; }
+  GWNRT_HD Sym3& operator+=(const Sym3& o) {
+    xx += o.xx; xy += o.xy; xz += o.xz; yy += o.yy; yz += o.yz; zz += o.zz;
+    return *this;
+  }
+  GWNRT_HD Sym3 operator*(T s) const { return {xx * s, xy * s, xz * s, yy * s, yz * s, zz * s}; }
+};
+using sym3 = Sym3<float>;
+
+template <class T>
+GWNRT_HD inline T sqr(T x) { return x * x; }
+
+}  // namespace gwnrt

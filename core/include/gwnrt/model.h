@@ -1,0 +1,77 @@
+// GwnModel: a mesh together with everything the queries need (the multipole triangle tree,
+// the boundary curve ∂M and its segment tree), built once on the CPU. Its views are what the
+// host-and-device query functions and the CUDA backend consume.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "gwnrt/bvh.h"
+#include "gwnrt/mesh.h"
+#include "gwnrt/status.h"
+
+namespace gwnrt {
+
+struct TriangleTree {
+  WideBvh bvh;
+  std::vector<WideNodeExpansion> expansion;
+  std::vector<WideNodeOrder1> order1;
+  std::vector<WideNodeOrder2> order2;
+  std::vector<vec3> vertices;          // 3 per triangle, leaf order
+  std::vector<uint32_t> triangle_ids;  // leaf order -> input triangle
+  TriangleTreeView view() const;
+};
+
+struct SegmentTree {
+  WideBvh bvh;
+  std::vector<vec3> endpoints;        // 2 per segment, leaf order
+  std::vector<uint32_t> segment_ids;  // leaf order -> segment index
+  SegmentTreeView view() const;
+};
+
+// ∂M: the edges whose oriented half-edges do not cancel. Vertices are matched by position
+// (bit-identical coordinates), so a soup that repeats shared vertices still cancels; zero-area
+// triangles are left out (they contribute nothing to w). An edge a->b whose half-edges sum to
+// k != 0 appears |k| times, oriented by the sign of k.
+struct BoundaryCurve {
+  std::vector<vec3> endpoints;  // 2 per segment: a, b
+  std::size_t segment_count() const { return endpoints.size() / 2; }
+};
+BoundaryCurve extract_boundary(const Mesh& mesh);
+
+TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
+SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
+
+struct BuildOptions {
+  uint32_t max_leaf_triangles = 4;
+  uint32_t max_leaf_segments = 4;
+};
+
+struct BuildTimings {
+  double tree_seconds = 0;      // triangle BVH + moments
+  double boundary_seconds = 0;  // ∂M extraction + its tree
+};
+
+class GwnModel {
+ public:
+  // Validates the mesh (finite coordinates, indices in range, not empty) and builds.
+  static Status build(Mesh mesh, GwnModel& out, const BuildOptions& options = {});
+
+  const Mesh& mesh() const { return mesh_; }
+  const TriangleTree& triangle_tree() const { return triangles_; }
+  const BoundaryCurve& boundary() const { return boundary_; }
+  const SegmentTree& boundary_tree() const { return boundary_tree_; }
+  TriangleTreeView triangle_view() const { return triangles_.view(); }
+  SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
+  const BuildTimings& timings() const { return timings_; }
+
+ private:
+  Mesh mesh_;
+  TriangleTree triangles_;
+  BoundaryCurve boundary_;
+  SegmentTree boundary_tree_;
+  BuildTimings timings_;
+};
+
+}  // namespace gwnrt

@@ -1,0 +1,102 @@
+// Exact per-triangle terms of the winding number: the signed solid angle of one triangle seen
+// from a point, its gradient and its Hessian. These are the near field of every query and the
+// brute-force reference. Host-and-device.
+#pragma once
+
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+// Signed solid angle Ω of triangle (p0, p1, p2) seen from x, in (-2π, 2π); positive when x is
+// on the side opposite to the normal (p1-p0)×(p2-p0) (van Oosterom–Strackee).
+// T = float for the fast path, double for the reference.
+template <class T>
+GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
+                                       const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
+  const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
+  const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+  const T numerator = glm::dot(a, glm::cross(b, c));
+  const T denominator = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
+  // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
+  return T(2) * atan2(numerator, denominator);
+}
+
+namespace detail {
+
+// One edge's Biot–Savart term of ∇Ω for the edge g_i → g_j (g = vertex - x). Zero when x lies
+// on the edge's line, which is the limit of the field on the line outside the segment.
+template <class T>
+struct EdgeField {
+  glm::vec<3, T> e;        // g_j - g_i, constant in x
+  glm::vec<3, T> c;        // g_i × g_j
+  T c2;                    // |c|²
+  T f;                     // e·(ĝ_j - ĝ_i)
+  glm::vec<3, T> gi_hat, gj_hat;
+  T inv_li, inv_lj;
+  bool degenerate;
+
+  GWNRT_HD EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj) {
+    e = gj - gi;
+    c = glm::cross(gi, gj);
+    c2 = glm::dot(c, c);
+    const T li = glm::length(gi), lj = glm::length(gj);
+    degenerate = !(c2 > T(0)) || !(li > T(0)) || !(lj > T(0));
+    inv_li = degenerate ? T(0) : T(1) / li;
+    inv_lj = degenerate ? T(0) : T(1) / lj;
+    gi_hat = gi * inv_li;
+    gj_hat = gj * inv_lj;
+    f = glm::dot(e, gj_hat - gi_hat);
+  }
+  GWNRT_HD glm::vec<3, T> gradient() const { return degenerate ? glm::vec<3, T>(0) : c * (f / c2); }
+};
+
+}  // namespace detail
+
+// ∇Ω with respect to x: the field of the triangle's boundary loop (Biot–Savart), summed over
+// its three edges. Only valid off the triangle itself, where Ω is smooth.
+template <class T>
+GWNRT_HD inline glm::vec<3, T> triangle_solid_angle_gradient(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
+                                                             const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
+  const glm::vec<3, T> g0 = p0 - x, g1 = p1 - x, g2 = p2 - x;
+  return detail::EdgeField<T>(g0, g1).gradient() + detail::EdgeField<T>(g1, g2).gradient() +
+         detail::EdgeField<T>(g2, g0).gradient();
+}
+
+// ∇Ω and the Hessian of Ω together (the Hessian is the x-derivative of each edge term; the
+// per-edge terms are not symmetric, their sum over the closed loop is, so the result is
+// symmetrised to remove round-off).
+template <class T>
+GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
+                                                      const glm::vec<3, T>& p2, const glm::vec<3, T>& x,
+                                                      glm::vec<3, T>& gradient, Sym3<T>& hessian) {
+  const glm::vec<3, T> g[3] = {p0 - x, p1 - x, p2 - x};
+  gradient = glm::vec<3, T>(0);
+  T h[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  for (int i = 0; i < 3; ++i) {
+    const detail::EdgeField<T> edge(g[i], g[(i + 1) % 3]);
+    if (edge.degenerate) continue;
+    const T inv_c2 = T(1) / edge.c2;
+    gradient += edge.c * (edge.f * inv_c2);
+    // ∂ĝ/∂x = -(I - ĝĝᵀ)/|g|, so ∇f = (I - ĝ_iĝ_iᵀ)e/|g_i| - (I - ĝ_jĝ_jᵀ)e/|g_j|.
+    const glm::vec<3, T> grad_f = (edge.e - edge.gi_hat * glm::dot(edge.gi_hat, edge.e)) * edge.inv_li -
+                                  (edge.e - edge.gj_hat * glm::dot(edge.gj_hat, edge.e)) * edge.inv_lj;
+    // c(x) = const + e × x, so ∂c/∂x_n = e × ê_n and c·∂c/∂x_n = (c × e)_n.
+    const glm::vec<3, T> c_cross_e = glm::cross(edge.c, edge.e);
+    const T s = edge.f * inv_c2;
+    const T t = T(2) * edge.f * inv_c2 * inv_c2;
+    const T ex = edge.e.x, ey = edge.e.y, ez = edge.e.z;
+    // (e × ê_n)_m as a matrix E[m][n] = ε_{m j n} e_j.
+    const T E[3][3] = {{0, ez, -ey}, {-ez, 0, ex}, {ey, -ex, 0}};
+    for (int m = 0; m < 3; ++m)
+      for (int n = 0; n < 3; ++n)
+        h[m][n] += grad_f[n] * edge.c[m] * inv_c2 + s * E[m][n] - t * edge.c[m] * c_cross_e[n];
+  }
+  hessian.xx = h[0][0];
+  hessian.yy = h[1][1];
+  hessian.zz = h[2][2];
+  hessian.xy = T(0.5) * (h[0][1] + h[1][0]);
+  hessian.xz = T(0.5) * (h[0][2] + h[2][0]);
+  hessian.yz = T(0.5) * (h[1][2] + h[2][1]);
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,142 @@
+// Parallel top-down build of the 4-wide BVH. Median splits on centroids keep the tree balanced
+// (depth <= log2 n), which is what multipole evaluation wants: compact clusters at every level.
+#include <algorithm>
+#include <atomic>
+#include <stdexcept>
+
+#include <tbb/parallel_reduce.h>
+#include <tbb/blocked_range.h>
+#include <tbb/task_group.h>
+
+#include "gwnrt/bvh.h"
+
+namespace gwnrt {
+namespace {
+
+constexpr uint32_t kParallelGrain = 4096;  // smaller subtrees are built in the calling task
+
+struct Range {
+  uint32_t begin, end;
+  uint32_t size() const { return end - begin; }
+};
+
+class Builder {
+ public:
+  Builder(std::span<const Aabb> bounds, uint32_t max_leaf, WideBvh& out)
+      : bounds_(bounds), max_leaf_(std::max<uint32_t>(1, max_leaf)), out_(out) {
+    const size_t n = bounds.size();
+    centroids_.resize(n);
+    out_.primitive_order.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      centroids_[i] = bounds[i].centre();
+      out_.primitive_order[i] = uint32_t(i);
+    }
+    out_.nodes.resize(std::max<size_t>(1, n));
+  }
+
+  void run() {
+    next_node_ = 1;
+    build(0, {0, uint32_t(bounds_.size())}, 1);
+    out_.nodes.resize(next_node_.load());
+    out_.depth = max_depth_.load();
+  }
+
+ private:
+  Aabb centroid_bounds(Range r) const {
+    auto reduce = [&](const tbb::blocked_range<uint32_t>& br, Aabb box) {
+      for (uint32_t i = br.begin(); i != br.end(); ++i) box.extend(centroids_[out_.primitive_order[i]]);
+      return box;
+    };
+    if (r.size() < kParallelGrain) return reduce(tbb::blocked_range<uint32_t>(r.begin, r.end), Aabb{});
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(r.begin, r.end, kParallelGrain), Aabb{}, reduce,
+                                [](Aabb a, const Aabb& b) { a.extend(b); return a; });
+  }
+
+  // Splits r at its median along the longest axis of its centroids' box.
+  uint32_t median_split(Range r) {
+    const Aabb box = centroid_bounds(r);
+    const vec3 extent = box.hi - box.lo;
+    const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
+    const uint32_t mid = r.begin + r.size() / 2;
+    uint32_t* order = out_.primitive_order.data();
+    std::nth_element(order + r.begin, order + mid, order + r.end,
+                     [&](uint32_t a, uint32_t b) { return centroids_[a][axis] < centroids_[b][axis]; });
+    return mid;
+  }
+
+  Aabb build(uint32_t node_index, Range range, uint32_t depth) {
+    uint32_t prev = max_depth_.load();
+    while (depth > prev && !max_depth_.compare_exchange_weak(prev, depth)) {
+    }
+    if (depth > uint32_t(kMaxBvhDepth)) throw std::runtime_error("gwnrt: BVH deeper than kMaxBvhDepth");
+
+    // Split the largest part until there are four or none can be split.
+    Range parts[kBvhWidth];
+    int part_count = 1;
+    parts[0] = range;
+    while (part_count < kBvhWidth) {
+      int largest = -1;
+      for (int i = 0; i < part_count; ++i)
+        if (parts[i].size() > max_leaf_ && (largest < 0 || parts[i].size() > parts[largest].size())) largest = i;
+      if (largest < 0) break;
+      const uint32_t mid = median_split(parts[largest]);
+      for (int i = part_count; i > largest + 1; --i) parts[i] = parts[i - 1];
+      parts[largest + 1] = {mid, parts[largest].end};
+      parts[largest].end = mid;
+      ++part_count;
+    }
+
+    WideNode node{};
+    Aabb lane_bounds[kBvhWidth];
+    tbb::task_group tasks;
+    for (int i = 0; i < kBvhWidth; ++i) {
+      node.child[i] = kEmptyLane;
+      node.count[i] = 0;
+      if (i >= part_count) continue;
+      const Range part = parts[i];
+      if (part.size() <= max_leaf_) {
+        node.child[i] = part.begin;
+        node.count[i] = part.size();
+        for (uint32_t k = part.begin; k < part.end; ++k) lane_bounds[i].extend(bounds_[out_.primitive_order[k]]);
+      } else {
+        const uint32_t child = next_node_.fetch_add(1);
+        node.child[i] = child;
+        if (part.size() >= kParallelGrain)
+          tasks.run([this, child, part, depth, &lane_bounds, i] { lane_bounds[i] = build(child, part, depth + 1); });
+        else
+          lane_bounds[i] = build(child, part, depth + 1);
+      }
+    }
+    tasks.wait();
+
+    Aabb total;
+    for (int i = 0; i < kBvhWidth; ++i) {
+      // Empty lanes get an inverted box so that box tests reject them.
+      for (int a = 0; a < 3; ++a) {
+        node.lo[a][i] = lane_bounds[i].lo[a];
+        node.hi[a][i] = lane_bounds[i].hi[a];
+      }
+      if (i < part_count) total.extend(lane_bounds[i]);
+    }
+    out_.nodes[node_index] = node;
+    return total;
+  }
+
+  std::span<const Aabb> bounds_;
+  uint32_t max_leaf_;
+  WideBvh& out_;
+  std::vector<vec3> centroids_;
+  std::atomic<uint32_t> next_node_{1};
+  std::atomic<uint32_t> max_depth_{0};
+};
+
+}  // namespace
+
+WideBvh build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size) {
+  WideBvh bvh;
+  if (primitive_bounds.empty()) return bvh;
+  Builder(primitive_bounds, max_leaf_size, bvh).run();
+  return bvh;
+}
+
+}  // namespace gwnrt

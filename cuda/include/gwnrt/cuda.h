@@ -1,0 +1,38 @@
+// The CUDA backend's host API: upload a GwnModel's flat arrays once, then evaluate batches of
+// points on the GPU with the very same evaluate_point the CPU driver runs. Plain C++ header
+// (no CUDA headers), so host programs include it freely.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+
+#include "gwnrt/batch.h"
+#include "gwnrt/model.h"
+
+namespace gwnrt::cuda {
+
+// True when a CUDA device can be used; otherwise `why` says what is missing.
+bool device_available(std::string* why = nullptr);
+
+// The model's arrays in device memory. Move-only; frees them on destruction.
+class DeviceModel {
+ public:
+  DeviceModel();
+  ~DeviceModel();
+  DeviceModel(DeviceModel&&) noexcept;
+  DeviceModel& operator=(DeviceModel&&) noexcept;
+
+  static Status upload(const GwnModel& model, DeviceModel& out);
+  ModelView view() const;  // device pointers: pass to kernels only
+
+ private:
+  struct Buffers;
+  std::unique_ptr<Buffers> buffers_;
+};
+
+// GPU counterpart of gwnrt::evaluate_points; results in input order.
+Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
+                       std::span<PointResult> results);
+
+}  // namespace gwnrt::cuda

@@ -1,0 +1,63 @@
+// RAII device memory for the CUDA backend (the smallgwn pattern: an owning buffer on the host
+// side, a raw pointer inside the trivially copyable view handed to kernels).
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <string>
+#include <vector>
+
+#include "gwnrt/status.h"
+
+namespace gwnrt::cuda {
+
+inline Status cuda_status(cudaError_t err, const char* what) {
+  if (err == cudaSuccess) return Status::Ok();
+  return {StatusCode::kUnavailable, std::string(what) + ": " + cudaGetErrorString(err)};
+}
+
+template <class T>
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  DeviceBuffer(DeviceBuffer&& o) noexcept : ptr_(o.ptr_), size_(o.size_) { o.ptr_ = nullptr; o.size_ = 0; }
+  DeviceBuffer& operator=(DeviceBuffer&& o) noexcept {
+    if (this != &o) { release(); ptr_ = o.ptr_; size_ = o.size_; o.ptr_ = nullptr; o.size_ = 0; }
+    return *this;
+  }
+  ~DeviceBuffer() { release(); }
+
+  Status allocate(size_t count) {
+    release();
+    if (count == 0) return Status::Ok();
+    if (Status s = cuda_status(cudaMalloc(&ptr_, count * sizeof(T)), "cudaMalloc"); !s.ok()) { ptr_ = nullptr; return s; }
+    size_ = count;
+    return Status::Ok();
+  }
+  Status upload(const T* data, size_t count) {
+    if (Status s = allocate(count); !s.ok()) return s;
+    if (count == 0) return Status::Ok();
+    return cuda_status(cudaMemcpy(ptr_, data, count * sizeof(T), cudaMemcpyHostToDevice), "cudaMemcpy to device");
+  }
+  Status upload(const std::vector<T>& v) { return upload(v.data(), v.size()); }
+  Status download(T* data, size_t count) const {
+    if (count == 0) return Status::Ok();
+    return cuda_status(cudaMemcpy(data, ptr_, count * sizeof(T), cudaMemcpyDeviceToHost), "cudaMemcpy to host");
+  }
+
+  T* get() const { return ptr_; }
+  size_t size() const { return size_; }
+
+ private:
+  void release() {
+    if (ptr_) cudaFree(ptr_);
+    ptr_ = nullptr;
+    size_ = 0;
+  }
+  T* ptr_ = nullptr;
+  size_t size_ = 0;
+};
+
+}  // namespace gwnrt::cuda

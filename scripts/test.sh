@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds everything (CUDA too when nvcc is found) and runs the test suite.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+cmake --build build --parallel
+ctest --test-dir build --output-on-failure --parallel "$(nproc)"

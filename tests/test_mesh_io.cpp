@@ -1,0 +1,761 @@
+// Tests for the strict OBJ/PLY readers: real files, the same mesh in every supported
+// encoding, and a table of broken inputs that must fail with a message naming the problem.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <set>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "gwnrt/mesh.h"
+
+namespace gwnrt {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string data_path(const char* name) { return std::string(GWNRT_TEST_DATA_DIR) + "/" + name; }
+
+// Shortest text that reads back to the same float, so text formats round-trip exactly.
+std::string num(float v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+std::string num(double v) {
+  char buf[40];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+class TempFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::random_device rd;
+    // ctest may run tests of several build trees at once; a random suffix keeps them apart.
+    dir_ = fs::path(::testing::TempDir()) /
+           (std::string("gwnrt_mesh_io_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  std::string write(const std::string& name, std::string_view bytes) const {
+    const fs::path p = dir_ / name;
+    // Replacing rather than truncating: ext4 flushes a truncated-and-rewritten file to disk
+    // on close, which made the many rewrites below take seconds.
+    std::error_code ec;
+    fs::remove(p, ec);
+    std::ofstream f(p, std::ios::binary);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    f.close();
+    EXPECT_TRUE(f.good()) << p;
+    return p.string();
+  }
+
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------------------
+// The small reference mesh: a triangle, a quad, a pentagon and another triangle.
+
+struct Small {
+  std::vector<vec3> positions = {{0, 0, 0},     {1.5f, 0, 0},      {1.5f, 2.25f, 0}, {0, 2.25f, -0.75f},
+                                 {-1, 1, 3.25f}, {0.5f, -0.5f, 1}, {2, 1, -2.5f}};
+  std::vector<std::vector<uint32_t>> faces = {{0, 1, 2}, {0, 2, 3, 4}, {1, 5, 6, 2, 3}, {4, 3, 6}};
+  std::vector<uvec3> triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {1, 5, 6}, {1, 6, 2}, {1, 2, 3}, {4, 3, 6}};
+};
+
+// Writes PLY bodies in any of the three encodings with any scalar type.
+class PlyBody {
+ public:
+  explicit PlyBody(std::string_view format) : ascii_(format == "ascii"), big_(format == "binary_big_endian") {}
+
+  void put(std::string_view type, double v) {
+    if (ascii_) {
+      if (!text_.empty() && text_.back() != '\n') text_ += ' ';
+      if (type == "float" || type == "float32") {
+        text_ += num(static_cast<float>(v));
+      } else if (type == "double" || type == "float64") {
+        text_ += num(v);
+      } else {
+        text_ += std::to_string(static_cast<long long>(v));
+      }
+      return;
+    }
+    if (type == "char" || type == "int8") return bin(static_cast<int8_t>(v));
+    if (type == "uchar" || type == "uint8") return bin(static_cast<uint8_t>(v));
+    if (type == "short" || type == "int16") return bin(static_cast<int16_t>(v));
+    if (type == "ushort" || type == "uint16") return bin(static_cast<uint16_t>(v));
+    if (type == "int" || type == "int32") return bin(static_cast<int32_t>(v));
+    if (type == "uint" || type == "uint32") return bin(static_cast<uint32_t>(v));
+    if (type == "float" || type == "float32") return bin(static_cast<float>(v));
+    if (type == "double" || type == "float64") return bin(v);
+    ADD_FAILURE() << "bad type " << type;
+  }
+
+  void end_element() {
+    if (ascii_) text_ += '\n';
+  }
+
+  const std::string& bytes() const { return text_; }
+
+ private:
+  template <class T>
+  void bin(T x) {
+    char b[sizeof(T)];
+    std::memcpy(b, &x, sizeof(T));
+    if (big_ != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
+    text_.append(b, sizeof(T));
+  }
+
+  bool ascii_;
+  bool big_;
+  std::string text_;
+};
+
+struct PlyTypes {
+  std::string xyz = "float";
+  std::string count = "uchar";
+  std::string index = "int";
+  std::string list_name = "vertex_indices";
+  std::string eol = "\n";
+};
+
+// The mesh with distractions: an unknown element before and after, extra scalar and list
+// properties on vertices, and extra properties on both sides of the face list.
+std::string small_ply(std::string_view format, const std::vector<vec3>& pos, const PlyTypes& t = {}) {
+  const Small s;
+  std::string h;
+  auto line = [&](const std::string& l) { h += l + t.eol; };
+  line("ply");
+  line("format " + std::string(format) + " 1.0");
+  line("comment written by test_mesh_io");
+  line("obj_info distractions included");
+  line("element material 2");
+  line("property uchar r");
+  line("property list uchar int ids");
+  line("element vertex " + std::to_string(pos.size()));
+  line("property " + t.xyz + " x");
+  line("property float nx");
+  line("property " + t.xyz + " y");
+  line("property uchar red");
+  line("property " + t.xyz + " z");
+  line("property list uchar float extra");
+  line("element face " + std::to_string(s.faces.size()));
+  line("property uchar flags");
+  line("property list " + t.count + " " + t.index + " " + t.list_name);
+  line("property double quality");
+  line("element edge 2");
+  line("property int vertex1");
+  line("property int vertex2");
+  line("end_header");
+
+  PlyBody b(format);
+  for (int m = 0; m < 2; ++m) {
+    b.put("uchar", 7 + m);
+    b.put("uchar", m + 1);
+    for (int k = 0; k <= m; ++k) b.put("int", -5 * k);
+    b.end_element();
+  }
+  for (size_t i = 0; i < pos.size(); ++i) {
+    b.put(t.xyz, pos[i].x);
+    b.put("float", 0.25);
+    b.put(t.xyz, pos[i].y);
+    b.put("uchar", 200);
+    b.put(t.xyz, pos[i].z);
+    b.put("uchar", i % 3);
+    for (size_t k = 0; k < i % 3; ++k) b.put("float", 1.5 * k);
+    b.end_element();
+  }
+  for (const auto& f : s.faces) {
+    b.put("uchar", 1);
+    b.put(t.count, static_cast<double>(f.size()));
+    for (uint32_t v : f) b.put(t.index, v);
+    b.put("double", 0.125);
+    b.end_element();
+  }
+  for (int e = 0; e < 2; ++e) {
+    b.put("int", e);
+    b.put("int", e + 1);
+    b.end_element();
+  }
+  std::string body = b.bytes();
+  if (format == "ascii" && t.eol != "\n") {
+    std::string converted;
+    for (char c : body) converted += c == '\n' ? t.eol : std::string(1, c);
+    body = converted;
+  }
+  return h + body;
+}
+
+void expect_mesh(const Mesh& m, const std::vector<vec3>& pos, const std::vector<uvec3>& tris) {
+  ASSERT_EQ(m.positions.size(), pos.size());
+  for (size_t i = 0; i < pos.size(); ++i) EXPECT_EQ(m.positions[i], pos[i]) << "vertex " << i;
+  ASSERT_EQ(m.triangles.size(), tris.size());
+  for (size_t i = 0; i < tris.size(); ++i) EXPECT_EQ(m.triangles[i], tris[i]) << "triangle " << i;
+}
+
+// Every directed edge has exactly one opposite twin.
+bool is_closed_manifold(const Mesh& m) {
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const uvec3& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      if (!edges.insert({t[k], t[(k + 1) % 3]}).second) return false;
+    }
+  }
+  for (const auto& [a, b] : edges) {
+    if (!edges.count({b, a})) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// Real files
+
+TEST(MeshIoData, Bunny) {
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(data_path("bunny.obj"), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.format, "obj");
+  EXPECT_EQ(r.vertex_count, 1839u);
+  EXPECT_EQ(r.triangle_count, 3674u);
+  EXPECT_EQ(m.triangles.size(), 3674u);
+  EXPECT_EQ(m.positions.size(), 1839u);
+  EXPECT_EQ(r.polygons_fanned, 0u);
+  EXPECT_TRUE(is_closed_manifold(m));
+}
+
+TEST(MeshIoData, BunnyWithHoles) {
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(data_path("bunny_holes.obj"), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.triangle_count, 3524u);
+  EXPECT_FALSE(is_closed_manifold(m));
+}
+
+TEST(MeshIoData, Teapot) {
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(data_path("teapot.obj"), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.triangle_count, 992u);
+  EXPECT_EQ(r.vertex_count, 792u);
+}
+
+TEST(MeshIoData, DragonPlyAscii) {
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(data_path("dragon_vrip_res4.ply"), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.format, "ply-ascii");
+  EXPECT_EQ(r.vertex_count, 5205u);
+  EXPECT_EQ(r.triangle_count, 11102u);
+  EXPECT_EQ(r.polygons_fanned, 0u);
+  EXPECT_EQ(m.positions[0], vec3(0.0317083f, 0.0557939f, -0.049836f));
+}
+
+// The dragon re-encoded as binary PLY (both byte orders) and OBJ reads back bit for bit.
+TEST_F(TempFiles, DragonRoundTrips) {
+  Mesh ref;
+  ASSERT_TRUE(load_mesh(data_path("dragon_vrip_res4.ply"), ref).ok());
+  for (const char* format : {"binary_little_endian", "binary_big_endian"}) {
+    std::string text = std::string("ply\nformat ") + format + " 1.0\nelement vertex " +
+                       std::to_string(ref.positions.size()) + "\nproperty float x\nproperty float y\nproperty float z\n" +
+                       "element face " + std::to_string(ref.triangles.size()) +
+                       "\nproperty list uchar uint vertex_indices\nend_header\n";
+    PlyBody b(format);
+    for (const vec3& p : ref.positions) {
+      for (int k = 0; k < 3; ++k) b.put("float", p[k]);
+    }
+    for (const uvec3& t : ref.triangles) {
+      b.put("uchar", 3);
+      for (int k = 0; k < 3; ++k) b.put("uint", t[k]);
+    }
+    Mesh m;
+    MeshLoadReport r;
+    const Status s = load_mesh(write(std::string(format) + ".ply", text + b.bytes()), m, &r);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(r.format, format == std::string("binary_little_endian") ? "ply-binary-le" : "ply-binary-be");
+    expect_mesh(m, ref.positions, ref.triangles);
+  }
+  std::string obj;
+  for (const vec3& p : ref.positions) obj += "v " + num(p.x) + " " + num(p.y) + " " + num(p.z) + "\n";
+  for (const uvec3& t : ref.triangles) {
+    obj += "f " + std::to_string(t.x + 1) + " " + std::to_string(t.y + 1) + " " + std::to_string(t.z + 1) + "\n";
+  }
+  Mesh m;
+  const Status s = load_mesh(write("dragon.obj", obj), m);
+  ASSERT_TRUE(s.ok()) << s.message();
+  expect_mesh(m, ref.positions, ref.triangles);
+}
+
+// ---------------------------------------------------------------------------------------
+// One mesh, every encoding
+
+const char* const kSmallObj =
+    "# the small mesh, with every statement a reader must tolerate\r\n"
+    "mtllib small.mtl\r\n"
+    "o small\r\n"
+    "\r\n"
+    "v 0 0 0 1.0\r\n"
+    "v 1.5 0 0 0.1 0.2 0.3\r\n"
+    "v +1.5 2.25 0\r\n"
+    "v 0 2.25e0 -0.75\r\n"
+    "\tv  -1   1 3.25  \r\n"
+    "v 0.5 -0.5 1\r\n"
+    "v 2 1 -2.5 # trailing comment\r\n"
+    "vt 0 0\r\n"
+    "vt 1 0\r\n"
+    "vn 0 0 1\r\n"
+    "vp 0.5\r\n"
+    "g part\r\n"
+    "s off\r\n"
+    "usemtl red\r\n"
+    "f 1 2 3\r\n"
+    "f 1/1 3/2 4/1 5/2\r\n"
+    "f -6//1 6//1 7//1 3//1 4//1\r\n"
+    "f 5/1/1 4/2/1 -1/1/1 # relative index\r\n"
+    "l 1 2\r\n"
+    "p 1\r\n"
+    "unknownkeyword 1 2 3";  // no final newline
+
+TEST_F(TempFiles, SmallObj) {
+  const Small ref;
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(write("small.obj", kSmallObj), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  expect_mesh(m, ref.positions, ref.triangles);
+  EXPECT_EQ(r.format, "obj");
+  EXPECT_EQ(r.vertex_count, 7u);
+  EXPECT_EQ(r.triangle_count, 7u);
+  EXPECT_EQ(r.polygons_fanned, 2u);
+  EXPECT_EQ(r.degenerate_triangles, 0u);
+}
+
+TEST_F(TempFiles, ExtensionIsCaseInsensitive) {
+  Mesh m;
+  EXPECT_TRUE(load_mesh(write("SMALL.OBJ", kSmallObj), m).ok());
+  EXPECT_TRUE(load_mesh(write("SMALL.Ply", small_ply("ascii", Small().positions)), m).ok());
+}
+
+TEST_F(TempFiles, SmallPlyAllEncodings) {
+  const Small ref;
+  const std::vector<std::pair<std::string, std::string>> formats = {
+      {"ascii", "ply-ascii"}, {"binary_little_endian", "ply-binary-le"}, {"binary_big_endian", "ply-binary-be"}};
+  std::vector<PlyTypes> variants(6);
+  variants[1].xyz = "double";
+  variants[1].count = "int";
+  variants[1].index = "uint";
+  variants[2].xyz = "float32";
+  variants[2].count = "uint8";
+  variants[2].index = "int32";
+  variants[2].list_name = "vertex_index";
+  variants[3].xyz = "float64";
+  variants[3].count = "ushort";
+  variants[3].index = "ushort";
+  variants[4].count = "char";
+  variants[4].index = "uchar";
+  variants[4].eol = "\r\n";
+  variants[5].count = "uint16";
+  variants[5].index = "int16";
+  int n = 0;
+  for (const auto& [format, name] : formats) {
+    for (const PlyTypes& t : variants) {
+      SCOPED_TRACE(format + " xyz=" + t.xyz + " count=" + t.count + " index=" + t.index + " eol=" +
+                   std::to_string(t.eol.size()));
+      Mesh m;
+      MeshLoadReport r;
+      const Status s = load_mesh(write("small" + std::to_string(n++) + ".ply", small_ply(format, ref.positions, t)), m, &r);
+      ASSERT_TRUE(s.ok()) << s.message();
+      expect_mesh(m, ref.positions, ref.triangles);
+      EXPECT_EQ(r.format, name);
+      EXPECT_EQ(r.vertex_count, 7u);
+      EXPECT_EQ(r.triangle_count, 7u);
+      EXPECT_EQ(r.polygons_fanned, 2u);
+      EXPECT_EQ(r.degenerate_triangles, 0u);
+    }
+  }
+}
+
+TEST_F(TempFiles, PlyIntegerCoordinates) {
+  const Small ref;
+  std::vector<vec3> pos;
+  for (const vec3& p : ref.positions) pos.push_back(p * 4.0f);  // all integers
+  int n = 0;
+  for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    for (const char* type : {"char", "short", "int", "int16"}) {
+      SCOPED_TRACE(std::string(format) + " " + type);
+      PlyTypes t;
+      t.xyz = type;
+      Mesh m;
+      const Status s = load_mesh(write("int" + std::to_string(n++) + ".ply", small_ply(format, pos, t)), m);
+      ASSERT_TRUE(s.ok()) << s.message();
+      expect_mesh(m, pos, ref.triangles);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Degenerate triangles
+
+TEST_F(TempFiles, DegenerateTrianglesAreKeptAndCounted) {
+  const char* obj =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 1 0 0\n"
+      "f 1 2 3\n"   // proper
+      "f 1 1 2\n"   // repeated index
+      "f 1 2 4\n"   // collinear
+      "f 2 5 3\n";  // two distinct vertices at the same place
+  Mesh m;
+  MeshLoadReport r;
+  const Status s = load_mesh(write("degenerate.obj", obj), m, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.triangle_count, 4u);
+  EXPECT_EQ(m.triangles.size(), 4u);
+  EXPECT_EQ(r.degenerate_triangles, 3u);
+
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n4 0 1 2 1\n";
+  const Status s2 = load_mesh(write("degenerate.ply", ply), m, &r);
+  ASSERT_TRUE(s2.ok()) << s2.message();
+  EXPECT_EQ(r.triangle_count, 3u);
+  EXPECT_EQ(r.degenerate_triangles, 3u);
+  EXPECT_EQ(r.polygons_fanned, 1u);
+}
+
+TEST(MeshIoDegenerate, ExactTest) {
+  EXPECT_FALSE(is_degenerate_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}));
+  EXPECT_TRUE(is_degenerate_triangle({0, 0, 0}, {1, 2, 3}, {2, 4, 6}));
+  EXPECT_TRUE(is_degenerate_triangle({1, 2, 3}, {1, 2, 3}, {4, 5, 7}));
+  EXPECT_TRUE(is_degenerate_triangle({1, 2, 3}, {1, 2, 3}, {1, 2, 3}));
+  // The product of the edges underflows in float but not in double.
+  EXPECT_FALSE(is_degenerate_triangle({0, 0, 0}, {1e-30f, 0, 0}, {0, 1e-30f, 0}));
+  // Nearly but not exactly collinear.
+  EXPECT_FALSE(is_degenerate_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, std::nextafter(2.0f, 3.0f)}));
+}
+
+// ---------------------------------------------------------------------------------------
+// validate_mesh
+
+Mesh tetrahedron() {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return m;
+}
+
+TEST(MeshIoValidate, InMemory) {
+  EXPECT_TRUE(validate_mesh(tetrahedron()).ok());
+
+  Mesh m = tetrahedron();
+  m.positions[1] = {std::numeric_limits<float>::quiet_NaN(), 0, 1};
+  Status s = validate_mesh(m, "src");
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.message(), "src: vertex 1 has a non-finite coordinate (nan, 0, 1)");
+
+  m = tetrahedron();
+  m.positions[3].z = -std::numeric_limits<float>::infinity();
+  s = validate_mesh(m);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.message(), "mesh: vertex 3 has a non-finite coordinate (0, 0, -inf)");
+
+  m = tetrahedron();
+  m.triangles[2] = {0, 7, 2};
+  s = validate_mesh(m, "src");
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.message(), "src: triangle 2 refers to vertex 7 but there are 4 vertices");
+
+  m = tetrahedron();
+  m.triangles.clear();
+  s = validate_mesh(m, "src");
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_EQ(s.message(), "src: the mesh has no triangles");
+
+  s = validate_mesh(Mesh{}, "src");
+  EXPECT_FALSE(s.ok());
+
+  // Degenerate triangles are valid.
+  m = tetrahedron();
+  m.triangles.push_back({1, 1, 2});
+  EXPECT_TRUE(validate_mesh(m).ok());
+}
+
+// ---------------------------------------------------------------------------------------
+// Broken inputs
+
+struct BadCase {
+  std::string name;  // file name, extension chooses the reader
+  std::string content;
+  StatusCode code;
+  std::vector<std::string> fragments;  // each must appear in the message
+};
+
+const std::string kTri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";  // lines 1-3
+
+// Nine lines; counts are text so that a test can declare counts no real file could hold.
+std::string ply_header(std::string_view format, const std::string& nv, const std::string& nf,
+                       std::string_view index_type = "int") {
+  return "ply\nformat " + std::string(format) + " 1.0\nelement vertex " + nv +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " + nf + "\nproperty list uchar " +
+         std::string(index_type) + " vertex_indices\nend_header\n";
+}
+
+std::string ply_header(std::string_view format, int nv, int nf, std::string_view index_type = "int") {
+  return ply_header(format, std::to_string(nv), std::to_string(nf), index_type);
+}
+const std::string kQuadVerts = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";  // lines 10-13 after ply_header
+
+std::string binary_ply(std::string_view format, const std::vector<vec3>& pos,
+                       const std::vector<std::vector<int>>& faces) {
+  PlyBody b(format);
+  for (const vec3& p : pos) {
+    for (int k = 0; k < 3; ++k) b.put("float", p[k]);
+  }
+  for (const auto& f : faces) {
+    b.put("uchar", static_cast<double>(f.size()));
+    for (int v : f) b.put("int", v);
+  }
+  return ply_header(format, static_cast<int>(pos.size()), static_cast<int>(faces.size())) + b.bytes();
+}
+
+std::vector<BadCase> bad_cases() {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<vec3> quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const std::string good_bin = binary_ply("binary_little_endian", quad, {{0, 1, 2}, {0, 2, 3}});
+  const auto P = StatusCode::kParseError;
+  const auto M = StatusCode::kInvalidMesh;
+  return {
+      // OBJ syntax
+      {"obj_bad_number.obj", "v 0 0 0\nv 1 0 0\nv 1 zz 0\nf 1 2 3\n", P, {":3:", "malformed number 'zz'"}},
+      {"obj_trailing_junk.obj", "v 0 0 0\nv 1 0 0\nv 1 1.0x 0\nf 1 2 3\n", P, {":3:", "'1.0x'"}},
+      {"obj_missing_coord.obj", kTri + "v 1 2\nf 1 2 3\n", P, {":4:", "vertex has 2 coordinates"}},
+      {"obj_bad_extra_component.obj", kTri + "v 1 2 3 red\nf 1 2 3\n", P, {":4:", "'red'"}},
+      {"obj_bad_corner.obj", kTri + "f 1/2/3/4 2 3\n", P, {":4:", "malformed face corner '1/2/3/4'"}},
+      {"obj_bad_corner_text.obj", kTri + "f 1 2x 3\n", P, {":4:", "malformed face corner '2x'"}},
+      {"obj_bad_corner_slash.obj", kTri + "f 1 2/ 3\n", P, {":4:", "'2/'"}},
+      {"obj_bad_corner_texture.obj", kTri + "f 1 2/a 3\n", P, {":4:", "'2/a'"}},
+      // OBJ content
+      {"obj_index_zero.obj", kTri + "f 0 1 2\n", M, {":4:", "vertex index 0 is invalid"}},
+      {"obj_index_too_big.obj", kTri + "f 1 2 4\n", M, {":4:", "vertex index 4 is out of range", "3 vertices"}},
+      {"obj_index_later_too_big.obj", kTri + "f 1 2 3\nf 1 2 9\nf 1 2 3\n", M, {":5:", "index 9 is out of range"}},
+      {"obj_index_huge.obj", kTri + "f 1 2 99999999999999999999999\n", M, {":4:", "out of range"}},
+      {"obj_index_negative.obj", kTri + "f -1 -2 -4\n", M, {":4:", "relative vertex index -4 is out of range"}},
+      {"obj_index_negative_early.obj", "v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0\n", M, {":2:", "-2", "out of range"}},
+      {"obj_nan.obj", "v 0 0 0\nv nan 0 1\nv 0 1 0\nf 1 2 3\n", M,
+       {":2:", "vertex 2 has a non-finite coordinate (nan, 0, 1)"}},
+      {"obj_inf.obj", kTri + "v 0 -inf 0\nf 1 2 3\n", M, {":4:", "vertex 4", "non-finite", "-inf"}},
+      {"obj_overflow.obj", kTri + "v 1e999 0 0\nf 1 2 3\n", M, {":4:", "non-finite", "inf"}},
+      {"obj_two_corners.obj", kTri + "f 1 2\n", M, {":4:", "face has 2 corners"}},
+      {"obj_no_corners.obj", kTri + "f\n", M, {":4:", "face has 0 corners"}},
+      {"obj_empty.obj", "", M, {"the mesh has no triangles"}},
+      {"obj_comments_only.obj", "# nothing\n\n   \n", M, {"the mesh has no triangles"}},
+      {"obj_vertices_only.obj", kTri, M, {"the mesh has no triangles"}},
+
+      // PLY header
+      {"ply_bad_magic.ply", "plx\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n", P,
+       {"not a PLY file"}},
+      {"ply_magic_case.ply", "PLY\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n", P,
+       {"not a PLY file"}},
+      {"ply_header_only_no_end.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", P,
+       {"no end_header"}},
+      {"ply_missing_end_header.ply",
+       "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\n" + kQuadVerts + "3 0 1 2\n",
+       P, {":9:", "missing end_header"}},
+      {"ply_bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", P,
+       {":2:", "unsupported PLY format 'binary_middle_endian'"}},
+      {"ply_bad_version.ply", "ply\nformat ascii 2.0\nend_header\n", P, {":2:", "version '2.0'"}},
+      {"ply_short_format.ply", "ply\nformat ascii\nend_header\n", P, {":2:", "malformed format line"}},
+      {"ply_missing_format.ply", "ply\nelement vertex 0\nend_header\n", P, {":2:", "format"}},
+      {"ply_no_format_at_all.ply", "ply\ncomment hi\nend_header\n", P, {"no 'format' line"}},
+      {"ply_unknown_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n", P,
+       {":4:", "unknown property type 'flot'"}},
+      {"ply_bad_count.ply", "ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", P,
+       {":3:", "malformed element count '-1'"}},
+      {"ply_missing_z.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nelement face 1\n"
+       "property list uchar int vertex_indices\nend_header\n0 0\n1 0\n0 1\n3 0 1 2\n",
+       P, {"the vertex element has no 'z' property"}},
+      {"ply_no_vertex_element.ply", "ply\nformat ascii 1.0\nend_header\n", P, {"no 'vertex' element"}},
+      {"ply_no_face_list.ply",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int corners\nend_header\n0 0 0\n3 0 0 0\n",
+       P, {"no 'vertex_indices' list"}},
+      {"ply_float_index.ply", ply_header("ascii", 4, 1, "float") + kQuadVerts + "3 0 1 2\n", P,
+       {"non-integer index type 'float'"}},
+      {"ply_float_count.ply",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list float int vertex_indices\nend_header\n0 0 0\n3 0 0 0\n",
+       P, {":8:", "list count type 'float' is not an integer type"}},
+      {"ply_too_many_vertices.ply", ply_header("binary_little_endian", "99999999999", "0"), M,
+       {"too many vertices"}},
+
+      // PLY ascii data
+      {"ply_truncated_ascii_vertices.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n", P,
+       {"truncated", "vertex"}},
+      {"ply_truncated_ascii_vertices_long.ply",
+       ply_header("ascii", 4, 1) + "0.000000 0.000000 0.000000\n1.000000 0.000000 0.000000\n", P,
+       {":11:", "truncated", "vertex 2 of 4"}},
+      {"ply_truncated_ascii_faces.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n", P,
+       {"truncated", "face"}},
+      {"ply_truncated_ascii_face_list.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 2     ", P,
+       {":15:", "truncated", "face 1 of 2"}},
+      {"ply_ascii_bad_number.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 zz 0\n1 1 0\n0 1 0\n3 0 1 2\n", P,
+       {":11:", "invalid float value 'zz' in vertex 1, property 'y'"}},
+      {"ply_ascii_float_as_index.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1.5 2\n", P,
+       {":14:", "invalid int value '1.5' in face 0"}},
+      {"ply_ascii_uchar_overflow.ply", ply_header("ascii", 4, 1) + kQuadVerts + "300 0 1 2\n", P,
+       {":14:", "invalid uchar value '300'"}},
+      {"ply_ascii_trailing_data.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1 2 3\n", P,
+       {":14:", "unexpected data '3'"}},
+      {"ply_out_of_range.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 1 9\n", M,
+       {":15:", "face 1 refers to vertex 9 but there are 4 vertices"}},
+      {"ply_negative_index.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 -1 2\n", M,
+       {"face 0 refers to vertex -1 but there are 4 vertices"}},
+      {"ply_two_corners.ply", ply_header("ascii", 4, 1) + kQuadVerts + "2 0 1\n", M,
+       {"face 0 has 2 corners, needs at least 3"}},
+      {"ply_ascii_nan.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 0 nan\n1 1 0\n0 1 0\n3 0 1 2\n", M,
+       {"vertex 1 has a non-finite coordinate (1, 0, nan)"}},
+      {"ply_no_faces.ply", ply_header("ascii", 4, 0) + kQuadVerts, M, {"the mesh has no triangles"}},
+
+      // PLY binary data
+      {"ply_truncated_binary.ply", good_bin.substr(0, good_bin.size() - 5), P, {"truncated", "face 1 of 2"}},
+      {"ply_truncated_binary_vertices.ply", good_bin.substr(0, good_bin.size() - 40), P, {"truncated", "vertex"}},
+      {"ply_binary_nan.ply", binary_ply("binary_little_endian", {{0, 0, 0}, {1, 0, 0}, {0, nan, 0}}, {{0, 1, 2}}), M,
+       {"vertex 2 has a non-finite coordinate (0, nan, 0)"}},
+      {"ply_binary_be_inf.ply",
+       binary_ply("binary_big_endian", {{0, 0, 0}, {1, 0, 0}, {0, 0, std::numeric_limits<float>::infinity()}},
+                  {{0, 1, 2}}),
+       M, {"vertex 2 has a non-finite coordinate (0, 0, inf)"}},
+      {"ply_binary_out_of_range.ply", binary_ply("binary_big_endian", quad, {{0, 1, 2}, {0, 2, 3}, {3, 4, 0}}), M,
+       {"face 2 refers to vertex 4 but there are 4 vertices"}},
+      {"ply_binary_negative.ply", binary_ply("binary_little_endian", quad, {{0, 1, 2}, {0, -7, 3}}), M,
+       {"face 1 refers to vertex -7"}},
+      {"ply_binary_forged_count.ply",
+       ply_header("binary_little_endian", "4000000000", "1") + "\x01\x02\x03", P,
+       {"truncated", "4000000000 vertex elements"}},
+  };
+}
+
+TEST_F(TempFiles, BadInputsFailWithUsefulMessages) {
+  for (const BadCase& c : bad_cases()) {
+    SCOPED_TRACE(c.name);
+    const std::string path = write(c.name, c.content);
+    Mesh m;
+    m.positions = {{7, 7, 7}};
+    MeshLoadReport r;
+    r.format = "untouched";
+    const Status s = load_mesh(path, m, &r);
+    ASSERT_FALSE(s.ok());
+    EXPECT_EQ(s.code(), c.code) << s.message();
+    EXPECT_EQ(s.message().rfind(path, 0), 0u) << "message should start with the path: " << s.message();
+    for (const std::string& f : c.fragments) EXPECT_NE(s.message().find(f), std::string::npos) << s.message();
+    // A failed load leaves its outputs alone.
+    EXPECT_EQ(m.positions.size(), 1u);
+    EXPECT_TRUE(m.triangles.empty());
+    EXPECT_EQ(r.format, "untouched");
+  }
+}
+
+TEST_F(TempFiles, FileProblems) {
+  Mesh m;
+  const std::string missing = (dir_ / "does_not_exist.obj").string();
+  Status s = load_mesh(missing, m);
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_NE(s.message().find(missing), std::string::npos) << s.message();
+
+  s = load_mesh(write("mesh.stl", "solid x\nendsolid x\n"), m);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("'.stl'"), std::string::npos) << s.message();
+
+  s = load_mesh(write("no_extension", kSmallObj), m);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+
+  fs::create_directories(dir_ / "folder.obj");
+  s = load_mesh((dir_ / "folder.obj").string(), m);
+  EXPECT_EQ(s.code(), StatusCode::kIoError);
+  EXPECT_NE(s.message().find("directory"), std::string::npos) << s.message();
+}
+
+std::string random_bytes(size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::string s(n, '\0');
+  for (char& c : s) c = static_cast<char>(rng() & 0xff);
+  return s;
+}
+
+TEST_F(TempFiles, RandomBytesFail) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    for (const char* ext : {".ply", ".obj"}) {
+      Mesh m;
+      const Status s = load_mesh(write("random" + std::to_string(seed) + ext, random_bytes(4096, seed)), m);
+      EXPECT_FALSE(s.ok()) << ext;
+    }
+    // Past a valid header, the bytes are data: they must be read safely too.
+    const std::string header = ply_header("binary_little_endian", 100, 100);
+    Mesh m;
+    const Status s = load_mesh(write("random_body" + std::to_string(seed) + ".ply", header + random_bytes(1000, seed)), m);
+    EXPECT_FALSE(s.ok());
+  }
+}
+
+// Every proper prefix of a binary file is truncated; prefixes and corrupted bytes of text
+// files may or may not parse, but nothing may crash (checked under the sanitizers).
+TEST_F(TempFiles, PrefixesAndCorruptionNeverCrash) {
+  const Small ref;
+  const std::string bin_le = small_ply("binary_little_endian", ref.positions);
+  const std::string bin_be = small_ply("binary_big_endian", ref.positions);
+  const std::string ascii = small_ply("ascii", ref.positions);
+  const std::string obj = kSmallObj;
+  for (const std::string* file : {&bin_le, &bin_be}) {
+    for (size_t n = 0; n < file->size(); ++n) {
+      Mesh m;
+      EXPECT_FALSE(load_mesh(write("prefix.ply", file->substr(0, n)), m).ok()) << n;
+    }
+  }
+  for (size_t n = 0; n < ascii.size(); ++n) {
+    Mesh m;
+    (void)load_mesh(write("prefix.ply", ascii.substr(0, n)), m);
+  }
+  for (size_t n = 0; n < obj.size(); ++n) {
+    Mesh m;
+    (void)load_mesh(write("prefix.obj", obj.substr(0, n)), m);
+  }
+  std::mt19937 rng(7);
+  for (const std::string* file : {&bin_le, &ascii, &obj}) {
+    const char* name = file == &obj ? "corrupt.obj" : "corrupt.ply";
+    for (int trial = 0; trial < 300; ++trial) {
+      std::string bad = *file;
+      for (int k = 0; k < 3; ++k) bad[rng() % bad.size()] = static_cast<char>(rng() & 0xff);
+      Mesh m;
+      MeshLoadReport r;
+      const Status s = load_mesh(write(name, bad), m, &r);
+      if (s.ok()) {
+        EXPECT_TRUE(validate_mesh(m).ok());
+        EXPECT_EQ(r.triangle_count, m.triangles.size());
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gwnrt

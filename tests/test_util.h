@@ -1,0 +1,98 @@
+// Shared helpers for the tests: bundled meshes, analytic shapes and point sets.
+#pragma once
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gwnrt/batch.h"
+#include "gwnrt/mesh.h"
+#include "gwnrt/model.h"
+
+namespace gwnrt::test {
+
+inline std::string data_path(const std::string& name) { return std::string(GWNRT_TEST_DATA_DIR) + "/" + name; }
+
+inline Mesh load_test_mesh(const std::string& name) {
+  Mesh mesh;
+  const Status s = load_mesh(data_path(name), mesh);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return mesh;
+}
+
+inline GwnModel build_model(Mesh mesh) {
+  GwnModel model;
+  const Status s = GwnModel::build(std::move(mesh), model);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return model;
+}
+
+// Unit sphere by subdividing an icosahedron `levels` times, outward-oriented, vertices on the sphere.
+inline Mesh make_sphere(int levels, float radius = 1.0f) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  Mesh m;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (auto& p : m.positions) p = glm::normalize(p);
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));
+      return mid[key] = uint32_t(m.positions.size() - 1);
+    };
+    std::vector<uvec3> next;
+    for (const uvec3& tri : m.triangles) {
+      const uint32_t a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      next.insert(next.end(), {{tri[0], a, c}, {tri[1], b, a}, {tri[2], c, b}, {a, b, c}});
+    }
+    m.triangles = std::move(next);
+  }
+  for (auto& p : m.positions) p *= radius;
+  return m;
+}
+
+// Axis-aligned cube [-1, 1]³, outward-oriented; `open_top` drops the two z = +1 triangles.
+inline Mesh make_cube(bool open_top = false) {
+  Mesh m;
+  m.positions = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+  m.triangles = {{0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5},
+                 {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  if (!open_top) m.triangles.insert(m.triangles.end(), {{4, 5, 6}, {4, 6, 7}});
+  return m;
+}
+
+inline Aabb mesh_bounds(const Mesh& m) {
+  Aabb box;
+  for (const vec3& p : m.positions) box.extend(p);
+  return box;
+}
+
+// The benchmark's mix: 70% uniform in the box, 30% in the box scaled 3× about its centre
+// (rejected when inside the box).
+inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const vec3 c = box.centre(), half = 0.5f * (box.hi - box.lo);
+  std::vector<vec3> points;
+  points.reserve(count);
+  while (points.size() < count) {
+    const bool inside = u(rng) < 0.7f;
+    const float scale = inside ? 1.0f : 3.0f;
+    const vec3 p = c + scale * half * vec3(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
+    const bool in_box = glm::all(glm::lessThanEqual(box.lo, p)) && glm::all(glm::lessThanEqual(p, box.hi));
+    if (inside || !in_box) points.push_back(p);
+  }
+  return points;
+}
+
+}  // namespace gwnrt::test
