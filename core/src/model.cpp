@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <chrono>
+#include <string>
 
 #include "gwnrt/model.h"
 
@@ -6,6 +8,12 @@ namespace gwnrt {
 
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
+  const bool any_area = std::any_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const uvec3& t) {
+    return !is_degenerate_triangle(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
+  });
+  if (!any_area)
+    return {StatusCode::kInvalidMesh, "mesh: all " + std::to_string(mesh.triangles.size()) +
+                                          " triangles have zero area (nothing to evaluate)"};
   using clock = std::chrono::steady_clock;
   GwnModel model;
   model.mesh_ = std::move(mesh);

@@ -135,7 +135,8 @@ class MomentBuilder {
       // The radius is the farthest corner of the lane's box, not the farthest vertex: the
       // looser ball keeps order 2 within 2e-3 at beta = 2 on scanned meshes (measured: the
       // vertex radius gives 2.4e-3 on the bunny, the corner 1.8e-3).
-      lanes[i].radius = farthest_corner(node, i, lanes[i].centre);
+      // Measured from the centre as stored (float), so the stored ball really holds the box.
+      lanes[i].radius = farthest_corner(node, i, dvec3(vec3(lanes[i].centre)));
       store_lane(lanes[i], i, ex, o1, o2);
       weighted += lanes[i].area * lanes[i].centre;
       plain += lanes[i].centre;
@@ -192,14 +193,23 @@ TriangleTreeView TriangleTree::view() const {
 }
 
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size) {
-  const size_t n = mesh.triangles.size();
+  // Zero-area triangles contribute nothing to w, but evaluated in float near their line their
+  // solid angle is noise of up to ±2π; so they are not part of the tree (nor of M for distances).
+  std::vector<uint32_t> kept;
+  kept.reserve(mesh.triangles.size());
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const uvec3 tri = mesh.triangles[t];
+    if (!is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) kept.push_back(t);
+  }
+  const size_t n = kept.size();
   std::vector<Aabb> bounds(n);
-  tbb::parallel_for(size_t(0), n, [&](size_t t) {
-    for (int k = 0; k < 3; ++k) bounds[t].extend(mesh.positions[mesh.triangles[t][k]]);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    for (int k = 0; k < 3; ++k) bounds[i].extend(mesh.positions[mesh.triangles[kept[i]][k]]);
   });
   TriangleTree tree;
   tree.bvh = build_wide_bvh(bounds, max_leaf_size);
-  tree.triangle_ids = tree.bvh.primitive_order;
+  tree.triangle_ids.resize(n);
+  for (size_t i = 0; i < n; ++i) tree.triangle_ids[i] = kept[tree.bvh.primitive_order[i]];
   tree.vertices.resize(3 * n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const uvec3 tri = mesh.triangles[tree.triangle_ids[i]];

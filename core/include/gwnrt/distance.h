@@ -14,13 +14,35 @@ struct ClosestPoint {
   T u, v;  // point = (1 - u - v) p0 + u p1 + v p2   (segments: point = (1 - u) p0 + u p1, v = 0)
 };
 
+template <class T>
+GWNRT_HD inline ClosestPoint<T> closest_point_on_segment(const glm::vec<3, T>& a, const glm::vec<3, T>& b,
+                                                         const glm::vec<3, T>& x) {
+  const glm::vec<3, T> ab = b - a;
+  const T len2 = glm::dot(ab, ab);
+  T t = len2 > 0 ? glm::dot(x - a, ab) / len2 : T(0);
+  t = t < 0 ? T(0) : (t > 1 ? T(1) : t);
+  return {a + t * ab, t, 0};
+}
+
 // Closest point of triangle (p0, p1, p2) to x, by the Voronoi region of x: vertex, edge or face.
-// Zero-area triangles fall through to the edge/vertex regions, which handle them.
+// A zero-area triangle has no face region and its region tests degenerate (they can pick a
+// wrong edge, or the face with a near-zero denominator), so it is treated as its three edges.
 template <class T>
 GWNRT_HD inline ClosestPoint<T> closest_point_on_triangle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                                           const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
   using V = glm::vec<3, T>;
   const V e1 = p1 - p0, e2 = p2 - p0, x0 = x - p0;
+  const V normal = glm::cross(e1, e2);
+  const T scale = glm::dot(e1, e1) * glm::dot(e2, e2);
+  if (!(glm::dot(normal, normal) > T(1e-12) * scale)) {
+    const ClosestPoint<T> c01 = closest_point_on_segment(p0, p1, x), c02 = closest_point_on_segment(p0, p2, x),
+                          c12 = closest_point_on_segment(p1, p2, x);
+    const T d01 = glm::dot(c01.point - x, c01.point - x), d02 = glm::dot(c02.point - x, c02.point - x),
+            d12 = glm::dot(c12.point - x, c12.point - x);
+    if (d01 <= d02 && d01 <= d12) return {c01.point, c01.u, 0};
+    if (d02 <= d12) return {c02.point, 0, c02.u};
+    return {c12.point, 1 - c12.u, c12.u};
+  }
   const T d1 = glm::dot(e1, x0), d2 = glm::dot(e2, x0);
   if (d1 <= 0 && d2 <= 0) return {p0, 0, 0};
   const V x1 = x - p1;
@@ -49,16 +71,6 @@ GWNRT_HD inline ClosestPoint<T> closest_point_on_triangle(const glm::vec<3, T>& 
   if (!(sum > 0)) return {p0, 0, 0};  // unreachable for a proper triangle; guards NaN
   const T v = vb / sum, w = vc / sum;
   return {p0 + v * e1 + w * e2, v, w};
-}
-
-template <class T>
-GWNRT_HD inline ClosestPoint<T> closest_point_on_segment(const glm::vec<3, T>& a, const glm::vec<3, T>& b,
-                                                         const glm::vec<3, T>& x) {
-  const glm::vec<3, T> ab = b - a;
-  const T len2 = glm::dot(ab, ab);
-  T t = len2 > 0 ? glm::dot(x - a, ab) / len2 : T(0);
-  t = t < 0 ? T(0) : (t > 1 ? T(1) : t);
-  return {a + t * ab, t, 0};
 }
 
 struct NearestPrimitive {

@@ -1,0 +1,288 @@
+// gwnrt-query: evaluate the generalized winding number (and its derivatives and distances) of a
+// triangle mesh at points read from a file, and write them as CSV.
+#include <unistd.h>
+
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include "gwnrt/batch.h"
+#include "gwnrt/mesh.h"
+#include "gwnrt/model.h"
+#include "gwnrt/point_query.h"
+#include "point_io.h"
+#include "progress_bar.h"
+
+#if defined(GWNRT_HAVE_CUDA)
+#include "gwnrt/cuda.h"
+#endif
+
+namespace {
+
+using gwnrt::PointResult;
+using gwnrt::vec3;
+
+constexpr const char* kProgram = "gwnrt-query";
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
+  return 1;
+}
+
+struct FieldName {
+  const char* name;
+  uint32_t bits;
+};
+constexpr FieldName kFieldNames[] = {
+    {"w", gwnrt::kFieldW},
+    {"grad", gwnrt::kFieldGradient},
+    {"hess", gwnrt::kFieldHessian},
+    {"udist", gwnrt::kFieldUnsignedDistance},
+    {"bdist", gwnrt::kFieldBoundaryDistance},
+};
+constexpr uint32_t kAllFields = gwnrt::kFieldW | gwnrt::kFieldGradient | gwnrt::kFieldHessian |
+                                gwnrt::kFieldUnsignedDistance | gwnrt::kFieldBoundaryDistance;
+
+std::optional<uint32_t> field_bits(const std::string& name) {
+  if (name == "all") return kAllFields;
+  for (const FieldName& f : kFieldNames) {
+    if (name == f.name) return f.bits;
+  }
+  return std::nullopt;
+}
+
+std::string valid_field_list() {
+  std::string list;
+  for (const FieldName& f : kFieldNames) list += std::string(list.empty() ? "" : ", ") + f.name;
+  return list + ", all";
+}
+
+// Rows are appended to one growing buffer and written in large blocks: with millions of rows,
+// per-value stdio calls would cost more than the evaluation itself.
+class CsvWriter {
+ public:
+  explicit CsvWriter(std::FILE* out) : out_(out) { buffer_.reserve(kFlushBytes + 4096); }
+
+  void field(float v) {
+    char buf[32];
+    // Shortest representation that parses back to the same float; to_chars writes "inf"/"-inf".
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    sep();
+    buffer_.append(buf, r.ptr);
+  }
+  void field(const char* text) {
+    sep();
+    buffer_ += text;
+  }
+  void end_row() {
+    buffer_ += '\n';
+    first_ = true;
+    if (buffer_.size() >= kFlushBytes) flush();
+  }
+  bool flush() {
+    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), out_) != buffer_.size()) ok_ = false;
+    buffer_.clear();
+    return ok_;
+  }
+  bool ok() const { return ok_; }
+
+ private:
+  static constexpr size_t kFlushBytes = 1 << 20;
+  void sep() {
+    if (!first_) buffer_ += ',';
+    first_ = false;
+  }
+  std::FILE* out_;
+  std::string buffer_;
+  bool first_ = true;
+  bool ok_ = true;
+};
+
+void write_csv(CsvWriter& csv, uint32_t fields, const std::vector<vec3>& points, const std::vector<PointResult>& results) {
+  for (const char* h : {"x", "y", "z"}) csv.field(h);
+  if (fields & gwnrt::kFieldW) csv.field("w");
+  if (fields & gwnrt::kFieldGradient) {
+    for (const char* h : {"gx", "gy", "gz"}) csv.field(h);
+  }
+  if (fields & gwnrt::kFieldHessian) {
+    for (const char* h : {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"}) csv.field(h);
+  }
+  if (fields & gwnrt::kFieldUnsignedDistance) csv.field("udist");
+  if (fields & gwnrt::kFieldBoundaryDistance) csv.field("bdist");
+  csv.end_row();
+
+  for (size_t i = 0; i < points.size(); ++i) {
+    const vec3& p = points[i];
+    const PointResult& r = results[i];
+    csv.field(p.x);
+    csv.field(p.y);
+    csv.field(p.z);
+    if (fields & gwnrt::kFieldW) csv.field(r.w);
+    if (fields & gwnrt::kFieldGradient) {
+      csv.field(r.gradient.x);
+      csv.field(r.gradient.y);
+      csv.field(r.gradient.z);
+    }
+    if (fields & gwnrt::kFieldHessian) {
+      for (float h : {r.hessian.xx, r.hessian.xy, r.hessian.xz, r.hessian.yy, r.hessian.yz, r.hessian.zz}) csv.field(h);
+    }
+    if (fields & gwnrt::kFieldUnsignedDistance) csv.field(r.unsigned_distance);
+    if (fields & gwnrt::kFieldBoundaryDistance) csv.field(r.boundary_distance);
+    csv.end_row();
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Evaluate the generalized winding number of a triangle mesh (OBJ/PLY) at points read from a text "
+               "file (one 'x y z' per line) and write CSV.",
+               kProgram};
+
+  std::string mesh_path;
+  std::string points_path;
+  std::vector<std::string> field_names{"w"};
+  int order = 2;
+  float beta = 2.0f;
+  bool exact = false;
+  std::string device = "cpu";
+  int threads = 0;
+  std::string output_path = "-";
+  bool verbose = false;
+
+  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
+  app.add_option("--points", points_path, "Points file, one 'x y z' per line ('-' for stdin)")->required();
+  app.add_option("--fields", field_names, "Comma-separated outputs: " + valid_field_list())
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& name) {
+            return field_bits(name) ? std::string() : "unknown field '" + name + "' (valid: " + valid_field_list() + ")";
+          },
+          "FIELD"));
+  app.add_option("--order", order, "Taylor expansion order of the tree approximation")
+      ->capture_default_str()
+      ->check(CLI::IsMember({0, 1, 2}));
+  app.add_option("--beta", beta, "Accuracy parameter: expand a cluster when |x - p| > beta * radius")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            double v = 0;
+            const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+            // CLI11's own PositiveNumber lets nan through; the tree needs a finite positive beta.
+            if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v) || v <= 0) {
+              return "beta must be a finite number > 0, got '" + text + "'";
+            }
+            return std::string();
+          },
+          "BETA > 0"));
+  app.add_flag("--exact", exact, "Brute-force double-precision reference instead of the tree (w, grad, hess only)");
+  app.add_option("--device", device, "Where to evaluate")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
+  app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
+  app.add_flag("-v,--verbose", verbose, "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");
+
+  CLI11_PARSE(app, argc, argv);
+
+  uint32_t fields = 0;
+  for (const std::string& name : field_names) fields |= *field_bits(name);
+  if (fields == 0) return fail("no fields requested");
+
+  const bool chatty = verbose || ::isatty(2) == 1;
+
+  gwnrt::QueryRequest request;
+  request.fields = fields;
+  request.taylor.order = order;
+  request.taylor.beta = beta;
+  request.exact = exact;
+
+  // Checked before the mesh is loaded so a large load is not wasted on a request that cannot run.
+  const bool use_cuda = device == "cuda";
+#if defined(GWNRT_HAVE_CUDA)
+  if (use_cuda) {
+    std::string why;
+    if (!gwnrt::cuda::device_available(&why)) return fail("--device cuda: no usable CUDA device: " + why);
+  }
+#else
+  if (use_cuda) {
+    return fail("--device cuda: this gwnrt-query was built without the CUDA backend "
+                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
+  }
+#endif
+
+  std::optional<tbb::global_control> thread_limit;
+  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
+
+  const auto t_load = std::chrono::steady_clock::now();
+  gwnrt::Mesh mesh;
+  gwnrt::MeshLoadReport report;
+  if (gwnrt::Status s = gwnrt::load_mesh(mesh_path, mesh, &report); !s.ok()) return fail(s.message());
+  const double load_seconds = seconds_since(t_load);
+
+  const auto t_build = std::chrono::steady_clock::now();
+  gwnrt::GwnModel model;
+  if (gwnrt::Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok()) return fail(s.message());
+  const double build_seconds = seconds_since(t_build);
+
+  if (chatty) {
+    std::fprintf(stderr, "%s: %s (%s): %zu vertices, %zu triangles", kProgram, mesh_path.c_str(), report.format.c_str(),
+                 report.vertex_count, report.triangle_count);
+    if (report.polygons_fanned) std::fprintf(stderr, " (%zu polygons fanned)", report.polygons_fanned);
+    std::fprintf(stderr, ", %zu degenerate, %zu boundary segments%s; loaded in %.3f s\n", report.degenerate_triangles,
+                 model.boundary().segment_count(), model.boundary().segment_count() ? "" : " (closed)", load_seconds);
+    std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s)\n", kProgram, build_seconds,
+                 model.timings().tree_seconds, model.timings().boundary_seconds);
+  }
+
+  std::vector<vec3> points;
+  if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points); !s.ok()) return fail(s.message());
+
+  std::vector<PointResult> results(points.size());
+  const auto t_eval = std::chrono::steady_clock::now();
+  if (use_cuda) {
+#if defined(GWNRT_HAVE_CUDA)
+    gwnrt::cuda::DeviceModel device_model;
+    if (gwnrt::Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok()) return fail(s.message());
+    if (gwnrt::Status s = gwnrt::cuda::evaluate_points(device_model, points, request, results); !s.ok()) {
+      return fail(s.message());
+    }
+#endif
+  } else {
+    std::atomic<size_t> progress{0};
+    gwnrt::Status s;
+    {
+      gwnrt::examples::ProgressBar bar(progress, points.size(), "pts");
+      s = gwnrt::evaluate_points(model, points, request, results, &progress);
+    }
+    if (!s.ok()) return fail(s.message());
+  }
+  if (chatty) {
+    const double t = seconds_since(t_eval);
+    std::fprintf(stderr, "%s: evaluated %zu points on %s in %.3f s (%.2f Mpts/s)\n", kProgram, points.size(),
+                 use_cuda ? "cuda" : "cpu", t, t > 0 ? double(points.size()) / t * 1e-6 : 0.0);
+  }
+
+  const bool to_stdout = output_path == "-";
+  std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
+  if (!out) return fail(output_path + ": cannot open for writing: " + std::strerror(errno));
+  CsvWriter csv(out);
+  write_csv(csv, fields, points, results);
+  bool ok = csv.flush();
+  ok = (std::fflush(out) == 0) && ok;
+  if (!to_stdout) ok = (std::fclose(out) == 0) && ok;
+  if (!ok) return fail((to_stdout ? std::string("<stdout>") : output_path) + ": write error");
+  return 0;
+}

@@ -1,0 +1,313 @@
+// Closest-point primitives against dense sampling, and the BVH distance queries against brute force.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "gwnrt/distance.h"
+#include "test_util.h"
+
+namespace gwnrt {
+namespace {
+
+using test::build_model;
+using test::load_test_mesh;
+using test::make_cube;
+using test::make_sphere;
+using test::mesh_bounds;
+using test::sample_points;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Tri {
+  dvec3 p0, p1, p2;
+  const char* kind;
+};
+
+// Triangles with positive area, down to slivers and needles, to reach every Voronoi region.
+std::vector<Tri> proper_triangles(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> t01(0.0, 1.0);
+  auto rp = [&] { return dvec3(u(rng), u(rng), u(rng)); };
+  std::vector<Tri> tris;
+  for (int i = 0; i < count; ++i) {
+    const dvec3 a = rp(), b = rp(), c = rp();
+    tris.push_back({a, b, c, "generic"});
+    // Sliver: the third corner lies just off the opposite edge.
+    const dvec3 off = glm::normalize(glm::cross(b - a, rp())) * 1e-4;
+    tris.push_back({a, b, a + t01(rng) * (b - a) + off, "sliver"});
+    // Needle: two corners almost coincide.
+    tris.push_back({a, b, b + 1e-5 * rp(), "needle"});
+  }
+  return tris;
+}
+
+// Zero-area triangles: collinear corners (the middle one in each slot) and repeated corners.
+std::vector<Tri> zero_area_triangles(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> t01(0.0, 1.0);
+  auto rp = [&] { return dvec3(u(rng), u(rng), u(rng)); };
+  std::vector<Tri> tris;
+  for (int i = 0; i < count; ++i) {
+    const dvec3 a = rp(), b = rp();
+    const dvec3 m = a + t01(rng) * (b - a);
+    tris.push_back({a, b, m, "collinear (m last)"});
+    tris.push_back({a, m, b, "collinear (m middle)"});
+    tris.push_back({m, a, b, "collinear (m first)"});
+    tris.push_back({a, b, a + 1.7 * (b - a), "collinear (third beyond b)"});
+    tris.push_back({a, a, b, "repeated p0=p1"});
+    tris.push_back({a, b, b, "repeated p1=p2"});
+    tris.push_back({b, a, b, "repeated p0=p2"});
+    tris.push_back({a, a, a, "point"});
+  }
+  return tris;
+}
+
+double longest_edge(const Tri& t) {
+  return std::max({glm::length(t.p1 - t.p0), glm::length(t.p2 - t.p1), glm::length(t.p0 - t.p2)});
+}
+
+void check_against_sampling(const std::vector<Tri>& tris, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  constexpr int kGrid = 400;
+  constexpr int kPointsPerTriangle = 12;
+  std::vector<dvec3> samples;
+  samples.reserve((kGrid + 1) * (kGrid + 2) / 2);
+  for (size_t ti = 0; ti < tris.size(); ++ti) {
+    const Tri& t = tris[ti];
+    samples.clear();
+    for (int i = 0; i <= kGrid; ++i)
+      for (int j = 0; i + j <= kGrid; ++j) {
+        const double a = double(i) / kGrid, b = double(j) / kGrid;
+        samples.push_back((1 - a - b) * t.p0 + a * t.p1 + b * t.p2);
+      }
+    // Every point of the triangle lies in a grid cell whose corners are samples and whose edges
+    // are the triangle's edges divided by kGrid (h = 1/kGrid), so some sample is within
+    // h * longest_edge of it.
+    const double grid_bound = longest_edge(t) / kGrid;
+    for (int k = 0; k < kPointsPerTriangle; ++k) {
+      // Half the queries near the triangle, where the regions are finely interleaved.
+      const dvec3 x = k % 2 ? dvec3(u(rng), u(rng), u(rng))
+                            : (t.p0 + t.p1 + t.p2) / 3.0 + 0.05 * dvec3(u(rng), u(rng), u(rng));
+      double sampled2 = kInf;
+      for (const dvec3& s : samples) sampled2 = std::min(sampled2, glm::dot(s - x, s - x));
+      const double sampled = std::sqrt(sampled2);
+      const ClosestPoint<double> c = closest_point_on_triangle(t.p0, t.p1, t.p2, x);
+      const double d = glm::length(c.point - x);
+      SCOPED_TRACE(std::string(t.kind) + " #" + std::to_string(ti) + ", query " + std::to_string(k));
+      // Coordinates are O(1): 1e-12 leaves room for double rounding only.
+      EXPECT_LE(d, sampled + 1e-12);
+      EXPECT_GE(d, sampled - grid_bound - 1e-12);
+      // Barycentrics must describe a point of the (closed) triangle; 1e-12 is rounding slack.
+      EXPECT_GE(c.u, -1e-12);
+      EXPECT_GE(c.v, -1e-12);
+      EXPECT_LE(c.u + c.v, 1 + 1e-12);
+      // The returned point and the barycentrics agree up to O(1) coordinates' double rounding.
+      const dvec3 from_bary = (1 - c.u - c.v) * t.p0 + c.u * t.p1 + c.v * t.p2;
+      EXPECT_LT(glm::length(from_bary - c.point), 1e-12);
+    }
+  }
+}
+
+TEST(ClosestPointOnTriangle, MatchesDenseBarycentricSampling) {
+  std::mt19937 rng(7);
+  check_against_sampling(proper_triangles(rng, 20), rng);
+}
+
+TEST(ClosestPointOnTriangle, ZeroAreaTrianglesMatchDenseSampling) {
+  std::mt19937 rng(8);
+  check_against_sampling(zero_area_triangles(rng, 6), rng);
+}
+
+TEST(ClosestPointOnTriangle, RepeatedCornerMinimalCase) {
+  // p0 == p1: the triangle is the segment p0-p2, whose nearest point to x is (0.5, 0, 0).
+  const dvec3 p(0, 0, 0), q(1, 0, 0), x(0.5, 1, 0);
+  EXPECT_EQ(closest_point_on_triangle(p, p, q, x).point, dvec3(0.5, 0, 0));
+  EXPECT_EQ(closest_point_on_triangle(p, q, q, x).point, dvec3(0.5, 0, 0));
+  EXPECT_EQ(closest_point_on_triangle(q, p, q, x).point, dvec3(0.5, 0, 0));
+}
+
+TEST(ClosestPointOnTriangle, VertexEdgeAndFaceRegionsExactly) {
+  const dvec3 p0(0, 0, 0), p1(1, 0, 0), p2(0, 1, 0);
+  auto cp = [&](dvec3 x) { return closest_point_on_triangle(p0, p1, p2, x); };
+  EXPECT_EQ(cp({-1, -1, 3}).point, p0);
+  EXPECT_EQ(cp({2, -0.5, 0}).point, p1);
+  EXPECT_EQ(cp({-0.5, 2, 0}).point, p2);
+  EXPECT_EQ(cp({0.5, -1, 1}).point, dvec3(0.5, 0, 0));
+  EXPECT_EQ(cp({-1, 0.25, 0}).point, dvec3(0, 0.25, 0));
+  EXPECT_EQ(cp({1, 1, -2}).point, dvec3(0.5, 0.5, 0));
+  const ClosestPoint<double> face = cp({0.25, 0.5, 7});
+  EXPECT_EQ(face.point, dvec3(0.25, 0.5, 0));
+  EXPECT_EQ(face.u, 0.25);
+  EXPECT_EQ(face.v, 0.5);
+}
+
+TEST(ClosestPointOnSegment, MatchesDenseSampling) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  constexpr int kSamples = 100000;
+  for (int s = 0; s < 60; ++s) {
+    const dvec3 a(u(rng), u(rng), u(rng));
+    const dvec3 b = s % 6 == 0 ? a : (s % 6 == 1 ? a + 1e-6 * dvec3(u(rng), u(rng), u(rng)) : dvec3(u(rng), u(rng), u(rng)));
+    // Any point of the segment is within half a sample spacing (length / kSamples) of a sample.
+    const double grid_bound = glm::length(b - a) / kSamples;
+    for (int k = 0; k < 10; ++k) {
+      const dvec3 x = 2.0 * dvec3(u(rng), u(rng), u(rng));
+      double sampled2 = kInf;
+      for (int i = 0; i <= kSamples; ++i) {
+        const dvec3 p = a + (double(i) / kSamples) * (b - a);
+        sampled2 = std::min(sampled2, glm::dot(p - x, p - x));
+      }
+      const double sampled = std::sqrt(sampled2);
+      const ClosestPoint<double> c = closest_point_on_segment(a, b, x);
+      const double d = glm::length(c.point - x);
+      SCOPED_TRACE("segment " + std::to_string(s) + ", query " + std::to_string(k));
+      // O(1) coordinates: double rounding only.
+      EXPECT_LE(d, sampled + 1e-12);
+      EXPECT_GE(d, sampled - grid_bound - 1e-12);
+      EXPECT_GE(c.u, 0.0);
+      EXPECT_LE(c.u, 1.0);
+      EXPECT_EQ(c.v, 0.0);
+      EXPECT_LT(glm::length((1 - c.u) * a + c.u * b - c.point), 1e-12);
+    }
+  }
+  // A zero-length segment is its point.
+  const dvec3 p(0.3, -0.2, 0.9);
+  const ClosestPoint<double> c = closest_point_on_segment(p, p, dvec3(4, 5, 6));
+  EXPECT_EQ(c.point, p);
+  EXPECT_EQ(c.u, 0.0);
+}
+
+// Distance in double from x to triangle `id` of the float mesh. Zero-area triangles are
+// measured as their three edges, so the reference does not lean on closest_point_on_triangle
+// where ClosestPointOnTriangle.ZeroArea* shows it to be unreliable.
+double triangle_distance(const Mesh& m, uint32_t id, const dvec3& x) {
+  const uvec3 t = m.triangles[id];
+  const dvec3 p[3] = {dvec3(m.positions[t[0]]), dvec3(m.positions[t[1]]), dvec3(m.positions[t[2]])};
+  if (!is_degenerate_triangle(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
+    return glm::length(closest_point_on_triangle(p[0], p[1], p[2], x).point - x);
+  double best = kInf;
+  for (int k = 0; k < 3; ++k)
+    best = std::min(best, glm::length(closest_point_on_segment(p[k], p[(k + 1) % 3], x).point - x));
+  return best;
+}
+
+double brute_triangle_distance(const Mesh& m, const dvec3& x) {
+  double best = kInf;
+  for (uint32_t id = 0; id < m.triangles.size(); ++id) best = std::min(best, triangle_distance(m, id, x));
+  return best;
+}
+
+double brute_boundary_distance(const BoundaryCurve& curve, const dvec3& x) {
+  double best = kInf;
+  for (size_t s = 0; s < curve.segment_count(); ++s) {
+    const ClosestPoint<double> c =
+        closest_point_on_segment(dvec3(curve.endpoints[2 * s]), dvec3(curve.endpoints[2 * s + 1]), x);
+    best = std::min(best, glm::dot(c.point - x, c.point - x));
+  }
+  return std::sqrt(best);
+}
+
+class DistanceOnRealMeshes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(DistanceOnRealMeshes, UnsignedDistanceMatchesBruteForce) {
+  const GwnModel model = build_model(load_test_mesh(GetParam()));
+  const Mesh& mesh = model.mesh();
+  const Aabb box = mesh_bounds(mesh);
+  const double diag = glm::length(dvec3(box.hi - box.lo));
+  // Float vertices, float traversal and points up to 3 boxes away: errors are ~1e-7 of the
+  // coordinates, so 1e-5 of the diagonal is loose but far below any wrong-triangle error.
+  const double tol = 1e-5 * diag;
+  const std::vector<vec3> points = sample_points(box, 2000, 3);
+  const TriangleTreeView view = model.triangle_view();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const dvec3 x(points[i]);
+    const NearestPrimitive n = unsigned_distance(view, points[i]);
+    const double ref = brute_triangle_distance(mesh, x);
+    SCOPED_TRACE("point " + std::to_string(i));
+    ASSERT_LT(n.primitive, mesh.triangles.size());
+    EXPECT_NEAR(n.distance, ref, tol);
+    // Ties between triangles are legitimate, so the id is judged by its distance.
+    EXPECT_NEAR(triangle_distance(mesh, n.primitive, x), ref, tol);
+    // Float barycentrics: 1e-5 covers their rounding on O(1) values.
+    EXPECT_GE(n.u, -1e-5f);
+    EXPECT_GE(n.v, -1e-5f);
+    EXPECT_LE(n.u, 1 + 1e-5f);
+    EXPECT_LE(n.v, 1 + 1e-5f);
+    EXPECT_LE(n.u + n.v, 1 + 1e-5f);
+    // The barycentrics describe the returned point on the returned triangle.
+    const uvec3 t = mesh.triangles[n.primitive];
+    const dvec3 from_bary = (1.0 - n.u - n.v) * dvec3(mesh.positions[t[0]]) + double(n.u) * dvec3(mesh.positions[t[1]]) +
+                            double(n.v) * dvec3(mesh.positions[t[2]]);
+    EXPECT_LT(glm::length(from_bary - dvec3(n.point)), tol);
+  }
+}
+
+TEST_P(DistanceOnRealMeshes, BoundaryDistanceMatchesBruteForce) {
+  const GwnModel model = build_model(load_test_mesh(GetParam()));
+  const BoundaryCurve& curve = model.boundary();
+  const Aabb box = mesh_bounds(model.mesh());
+  const double diag = glm::length(dvec3(box.hi - box.lo));
+  const double tol = 1e-5 * diag;  // same float-rounding argument as for triangles
+  const std::vector<vec3> points = sample_points(box, 2000, 5);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const dvec3 x(points[i]);
+    const NearestPrimitive n = boundary_distance(model.boundary_view(), points[i]);
+    SCOPED_TRACE("point " + std::to_string(i));
+    if (curve.segment_count() == 0) {
+      EXPECT_EQ(n.distance, kInfinity);
+      EXPECT_EQ(n.primitive, kEmptyLane);
+      continue;
+    }
+    const double ref = brute_boundary_distance(curve, x);
+    EXPECT_NEAR(n.distance, ref, tol);
+    ASSERT_LT(n.primitive, curve.segment_count());
+    const double id_dist = glm::length(
+        closest_point_on_segment(dvec3(curve.endpoints[2 * n.primitive]), dvec3(curve.endpoints[2 * n.primitive + 1]), x)
+            .point -
+        x);
+    EXPECT_NEAR(id_dist, ref, tol);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, DistanceOnRealMeshes,
+                         ::testing::Values("bunny.obj", "bunny_holes.obj", "teapot.obj", "dragon_vrip_res4.ply"),
+                         [](const auto& info) {
+                           std::string name = info.param;
+                           return name.substr(0, name.find('.'));
+                         });
+
+TEST(BoundaryDistance, InfiniteForClosedMeshes) {
+  for (const Mesh& mesh : {load_test_mesh("bunny.obj"), make_sphere(2), make_cube()}) {
+    const GwnModel model = build_model(mesh);
+    EXPECT_EQ(model.boundary().segment_count(), 0u);
+    for (const vec3& x : sample_points(mesh_bounds(mesh), 50, 9)) {
+      const NearestPrimitive n = boundary_distance(model.boundary_view(), x);
+      EXPECT_EQ(n.distance, kInfinity);
+      EXPECT_EQ(n.primitive, kEmptyLane);
+    }
+  }
+}
+
+TEST(BoundaryDistance, OpenCubeIsTheDistanceToItsRim) {
+  const GwnModel model = build_model(make_cube(true));
+  for (const vec3& x : sample_points(mesh_bounds(model.mesh()), 500, 13)) {
+    const NearestPrimitive n = boundary_distance(model.boundary_view(), x);
+    ASSERT_TRUE(std::isfinite(n.distance));
+    // The rim is the square |x|,|y| <= 1 at z = 1; its distance has a closed form.
+    const double dz = double(x.z) - 1.0;
+    const double dx = std::max(std::abs(double(x.x)) - 1.0, 0.0), dy = std::max(std::abs(double(x.y)) - 1.0, 0.0);
+    const double in_x = 1.0 - std::abs(double(x.x)), in_y = 1.0 - std::abs(double(x.y));
+    double planar;  // distance within the plane z = 1 from (x, y) to the square's outline
+    if (dx == 0 && dy == 0) planar = std::min(in_x, in_y);
+    else planar = std::sqrt(dx * dx + dy * dy);
+    // Float query with O(1) coordinates.
+    EXPECT_NEAR(n.distance, std::sqrt(planar * planar + dz * dz), 1e-5);
+    EXPECT_NEAR(n.distance, brute_boundary_distance(model.boundary(), dvec3(x)), 1e-5);
+  }
+}
+
+}  // namespace
+}  // namespace gwnrt

@@ -1,0 +1,287 @@
+// gwnrt-query run as a subprocess: CSV layout, agreement with the library it wraps, and that bad
+// input ends in a message and a non-zero exit rather than a crash or silently wrong rows.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gwnrt/batch.h"
+#include "test_util.h"
+
+namespace gwnrt {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The test target does not know where the examples are built, so find the program next to the
+// test binary's own build directory; a build without examples skips these tests.
+std::string query_binary() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return {};
+  const fs::path candidate = self.parent_path() / ".." / "examples" / "gwnrt-query";
+  return fs::exists(candidate, ec) ? fs::canonical(candidate, ec).string() : std::string();
+}
+
+std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
+std::string probe_points_path() { return test::data_path("../../examples/data/bunny_probe_points.txt"); }
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string temp_path(const std::string& stem) {
+  static int counter = 0;
+  return ::testing::TempDir() + "gwnrt_query_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" + stem;
+}
+
+struct RunResult {
+  bool exited = false;  // false: killed by a signal
+  int exit_code = -1;
+  std::string out, err;
+};
+
+RunResult run_query(const std::string& binary, const std::string& args, const std::string& stdin_path = "") {
+  const std::string out = temp_path("out.csv"), err = temp_path("err.txt");
+  // exec, so that a crash shows up as a signal in the status rather than as the shell's exit code.
+  std::string cmd = "exec " + quote(binary) + " " + args + " >" + quote(out) + " 2>" + quote(err);
+  if (!stdin_path.empty()) cmd += " <" + quote(stdin_path);
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exited = status != -1 && WIFEXITED(status);
+  if (r.exited) r.exit_code = WEXITSTATUS(status);
+  r.out = read_file(out);
+  r.err = read_file(err);
+  std::remove(out.c_str());
+  std::remove(err.c_str());
+  return r;
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<float>> rows;
+};
+
+Csv parse_csv(const std::string& text) {
+  Csv csv;
+  std::istringstream in(text);
+  std::string line;
+  bool first = true;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream ls(line);
+    while (std::getline(ls, cell, ',')) cells.push_back(cell);
+    if (first) {
+      csv.header = cells;
+      first = false;
+      continue;
+    }
+    std::vector<float> row;
+    for (const std::string& c : cells) {
+      char* end = nullptr;
+      row.push_back(std::strtof(c.c_str(), &end));
+      EXPECT_EQ(*end, '\0') << "bad CSV cell '" << c << "'";
+    }
+    csv.rows.push_back(row);
+  }
+  return csv;
+}
+
+// Same reading rules as the program (comments, blank lines), kept independent of its parser.
+std::vector<vec3> load_points(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<vec3> points;
+  std::string line;
+  while (std::getline(in, line)) {
+    line = line.substr(0, line.find('#'));
+    std::istringstream ls(line);
+    vec3 p;
+    if (ls >> p.x >> p.y >> p.z) points.push_back(p);
+  }
+  return points;
+}
+
+class QueryCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    binary_ = query_binary();
+    if (binary_.empty()) GTEST_SKIP() << "gwnrt-query not built next to the tests (expected <tests>/../examples/gwnrt-query)";
+  }
+  std::string binary_;
+};
+
+TEST_F(QueryCliTest, AllFieldsMatchLibraryInInputOrder) {
+  const std::vector<vec3> points = load_points(probe_points_path());
+  ASSERT_GE(points.size(), 150u);
+  const RunResult r =
+      run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields w,grad,hess,udist,bdist");
+  ASSERT_TRUE(r.exited);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const Csv csv = parse_csv(r.out);
+  const std::vector<std::string> expected_header = {"x",   "y",   "z",   "w",   "gx",  "gy",    "gz",   "hxx",
+                                                    "hxy", "hxz", "hyy", "hyz", "hzz", "udist", "bdist"};
+  EXPECT_EQ(csv.header, expected_header);
+  ASSERT_EQ(csv.rows.size(), points.size());
+
+  GwnModel model = test::build_model(test::load_test_mesh("bunny_holes.obj"));
+  QueryRequest request;
+  request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldBoundaryDistance;
+  std::vector<PointResult> results(points.size());
+  ASSERT_TRUE(evaluate_points(model, points, request, results).ok());
+
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::vector<float>& row = csv.rows[i];
+    ASSERT_EQ(row.size(), expected_header.size()) << "row " << i;
+    const PointResult& e = results[i];
+    EXPECT_EQ(row[0], points[i].x) << "row " << i;
+    EXPECT_EQ(row[1], points[i].y) << "row " << i;
+    EXPECT_EQ(row[2], points[i].z) << "row " << i;
+    // Shortest round-trip printing means the parsed values are bit-identical to the library's.
+    EXPECT_EQ(row[3], e.w) << "row " << i;
+    EXPECT_EQ(row[4], e.gradient.x) << "row " << i;
+    EXPECT_EQ(row[5], e.gradient.y) << "row " << i;
+    EXPECT_EQ(row[6], e.gradient.z) << "row " << i;
+    EXPECT_EQ(row[7], e.hessian.xx) << "row " << i;
+    EXPECT_EQ(row[8], e.hessian.xy) << "row " << i;
+    EXPECT_EQ(row[9], e.hessian.xz) << "row " << i;
+    EXPECT_EQ(row[10], e.hessian.yy) << "row " << i;
+    EXPECT_EQ(row[11], e.hessian.yz) << "row " << i;
+    EXPECT_EQ(row[12], e.hessian.zz) << "row " << i;
+    EXPECT_EQ(row[13], e.unsigned_distance) << "row " << i;
+    EXPECT_EQ(row[14], e.boundary_distance) << "row " << i;
+  }
+}
+
+TEST_F(QueryCliTest, DefaultIsWOnlyAndOptionsChangeNothingButColumns) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path());
+  const RunResult w = run_query(binary_, base);
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  EXPECT_EQ(w.out.substr(0, w.out.find('\n')), "x,y,z,w");
+
+  const RunResult dist = run_query(binary_, base + " --fields bdist,udist --threads 1");
+  ASSERT_EQ(dist.exit_code, 0) << dist.err;
+  EXPECT_EQ(dist.out.substr(0, dist.out.find('\n')), "x,y,z,udist,bdist");
+
+  // A single thread and a file output give the very same bytes.
+  const std::string out_file = temp_path("o.csv");
+  const RunResult to_file = run_query(binary_, base + " --threads 1 -o " + quote(out_file));
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
+  EXPECT_TRUE(to_file.out.empty());
+  EXPECT_EQ(read_file(out_file), w.out);
+  std::remove(out_file.c_str());
+}
+
+TEST_F(QueryCliTest, ClosedMeshPrintsInfiniteBoundaryDistance) {
+  const std::string closed_mesh = test::data_path("bunny.obj");
+  const RunResult r = run_query(binary_, quote(closed_mesh) + " --points " + quote(probe_points_path()) + " --fields bdist");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_FALSE(csv.rows.empty());
+  for (const auto& row : csv.rows) EXPECT_TRUE(std::isinf(row.at(3)));
+  EXPECT_NE(r.out.find(",inf\n"), std::string::npos);
+}
+
+TEST_F(QueryCliTest, ExactAgreesWithTree) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path());
+  const RunResult tree = run_query(binary_, base);
+  const RunResult exact = run_query(binary_, base + " --exact");
+  ASSERT_EQ(tree.exit_code, 0) << tree.err;
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  const Csv a = parse_csv(tree.out), b = parse_csv(exact.out);
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  ASSERT_FALSE(a.rows.empty());
+  for (size_t i = 0; i < a.rows.size(); ++i) EXPECT_NEAR(a.rows[i].at(3), b.rows[i].at(3), 2e-3) << "row " << i;
+}
+
+TEST_F(QueryCliTest, ReadsPointsFromStdin) {
+  const RunResult from_file = run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()));
+  const RunResult from_stdin = run_query(binary_, quote(mesh_path()) + " --points -", probe_points_path());
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  ASSERT_EQ(from_stdin.exit_code, 0) << from_stdin.err;
+  EXPECT_EQ(from_stdin.out, from_file.out);
+}
+
+TEST_F(QueryCliTest, BadArgumentsFailWithMessage) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path());
+  struct Case {
+    std::string args, expect_in_stderr;
+  };
+  const std::vector<Case> cases = {
+      {base + " --order 3", "--order"},
+      {base + " --beta -1", "beta"},
+      {base + " --beta 0", "beta"},
+      {base + " --fields w,curl", "curl"},
+      {base + " --device tpu", "--device"},
+      {base + " --threads 0", "--threads"},
+      {quote(mesh_path()), "--points"},
+      {quote(test::data_path("no_such_mesh.obj")) + " --points " + quote(probe_points_path()), "no_such_mesh.obj"},
+      {quote(mesh_path()) + " --points " + quote(test::data_path("no_such_points.txt")), "no_such_points.txt"},
+  };
+  for (const Case& c : cases) {
+    const RunResult r = run_query(binary_, c.args);
+    EXPECT_TRUE(r.exited) << c.args;
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expect_in_stderr), std::string::npos) << c.args << "\nstderr: " << r.err;
+    EXPECT_TRUE(r.out.empty()) << c.args;
+  }
+}
+
+TEST_F(QueryCliTest, MalformedPointsNameTheLine) {
+  struct Case {
+    std::string text, where;
+  };
+  const std::vector<Case> cases = {
+      {"# header\n0 0 0\n1 2\n", ":3:"},
+      {"0 0 0\n\n1 2 3 4\n", ":3:"},
+      {"1 2 x\n", ":1:"},
+      {"0 0 0\n1 nan 0\n", ":2:"},
+      {"0 0 0\n1 1e99 0\n", ":2:"},
+  };
+  for (const Case& c : cases) {
+    const std::string points = temp_path("bad_points.txt");
+    std::ofstream(points) << c.text;
+    const RunResult r = run_query(binary_, quote(mesh_path()) + " --points " + quote(points));
+    EXPECT_TRUE(r.exited);
+    EXPECT_EQ(r.exit_code, 1) << c.text;
+    EXPECT_NE(r.err.find(points + c.where), std::string::npos) << "stderr: " << r.err;
+    EXPECT_NE(r.err.find("gwnrt-query: "), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty());
+    std::remove(points.c_str());
+  }
+}
+
+TEST_F(QueryCliTest, CudaDeviceNeverCrashes) {
+  const RunResult r =
+      run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --device cuda");
+  // Built with CUDA on a machine with a GPU this succeeds; anywhere else it must explain why.
+  ASSERT_TRUE(r.exited) << "gwnrt-query --device cuda was killed by a signal";
+  if (r.exit_code != 0) {
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("cuda"), std::string::npos) << r.err;
+  } else {
+    EXPECT_EQ(parse_csv(r.out).rows.size(), load_points(probe_points_path()).size());
+  }
+}
+
+}  // namespace
+}  // namespace gwnrt
