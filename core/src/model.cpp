@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <chrono>
 #include <string>
 
@@ -8,17 +7,15 @@ namespace gwnrt {
 
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
-  const bool any_area = std::any_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const uvec3& t) {
-    return !is_degenerate_triangle(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]);
-  });
-  if (!any_area)
-    return {StatusCode::kInvalidMesh, "mesh: all " + std::to_string(mesh.triangles.size()) +
-                                          " triangles have zero area (nothing to evaluate)"};
   using clock = std::chrono::steady_clock;
   GwnModel model;
   model.mesh_ = std::move(mesh);
   auto t0 = clock::now();
   model.triangles_ = build_triangle_tree(model.mesh_, options.max_leaf_triangles);
+  // The tree leaves zero-area triangles out; with none left there is nothing to evaluate.
+  if (model.triangles_.triangle_ids.empty())
+    return {StatusCode::kInvalidMesh, "mesh: all " + std::to_string(model.mesh_.triangles.size()) +
+                                          " triangles have zero area (nothing to evaluate)"};
   auto t1 = clock::now();
   model.boundary_ = extract_boundary(model.mesh_);
   model.boundary_tree_ = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments);
