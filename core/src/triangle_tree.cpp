@@ -215,7 +215,7 @@ TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size) {
     const uvec3 tri = mesh.triangles[tree.triangle_ids[i]];
     for (int k = 0; k < 3; ++k) tree.vertices[3 * i + k] = mesh.positions[tri[k]];
   });
-  MomentBuilder(tree).run();
+  if (n > 0) MomentBuilder(tree).run();  // an empty tree has no root to hold moments
   return tree;
 }
 
