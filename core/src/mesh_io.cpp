@@ -530,24 +530,14 @@ struct BinarySource {
   uint64_t remaining() const { return static_cast<uint64_t>(end - p); }
   std::string where(const std::string& path) const { return path; }
 
-  Res read_real(Ty t, double& v) {
-    if (remaining() < info(t).size) return Res::kEnd;
-    switch (t) {
-      case Ty::kI8: v = static_cast<int8_t>(*p); break;
-      case Ty::kU8: v = *p; break;
-      case Ty::kI16: v = std::bit_cast<int16_t>(load_bits<kSwap, uint16_t>(p)); break;
-      case Ty::kU16: v = load_bits<kSwap, uint16_t>(p); break;
-      case Ty::kI32: v = std::bit_cast<int32_t>(load_bits<kSwap, uint32_t>(p)); break;
-      case Ty::kU32: v = load_bits<kSwap, uint32_t>(p); break;
-      case Ty::kF32: v = std::bit_cast<float>(load_bits<kSwap, uint32_t>(p)); break;
-      case Ty::kF64: v = std::bit_cast<double>(load_bits<kSwap, uint64_t>(p)); break;
-    }
-    p += info(t).size;
-    return Res::kOk;
-  }
-
+  Res read_real(Ty t, double& v) { return read_value(t, v); }
   // Only called with integer types (the header rejects others where integers are needed).
-  Res read_int(Ty t, int64_t& v) {
+  Res read_int(Ty t, int64_t& v) { return read_value(t, v); }
+
+ private:
+  // One value of type t; float types never decode into an integer V.
+  template <class V>
+  Res read_value(Ty t, V& v) {
     if (remaining() < info(t).size) return Res::kEnd;
     switch (t) {
       case Ty::kI8: v = static_cast<int8_t>(*p); break;
@@ -557,12 +547,19 @@ struct BinarySource {
       case Ty::kI32: v = std::bit_cast<int32_t>(load_bits<kSwap, uint32_t>(p)); break;
       case Ty::kU32: v = load_bits<kSwap, uint32_t>(p); break;
       case Ty::kF32:
-      case Ty::kF64: return Res::kBad;
+        if constexpr (std::is_integral_v<V>) return Res::kBad;
+        else v = std::bit_cast<float>(load_bits<kSwap, uint32_t>(p));
+        break;
+      case Ty::kF64:
+        if constexpr (std::is_integral_v<V>) return Res::kBad;
+        else v = std::bit_cast<double>(load_bits<kSwap, uint64_t>(p));
+        break;
     }
     p += info(t).size;
     return Res::kOk;
   }
 
+ public:
   Res skip(Ty t, uint64_t n) {
     if (n > remaining() / info(t).size) return Res::kEnd;
     p += n * info(t).size;
