@@ -12,6 +12,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
+#include "point_mix.h"
 
 namespace gwnrt::test {
 
@@ -77,22 +78,7 @@ inline Aabb mesh_bounds(const Mesh& m) {
   return box;
 }
 
-// The benchmark's mix: 70% uniform in the box, 30% in the box scaled 3× about its centre
-// (rejected when inside the box).
-inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  const vec3 c = box.centre(), half = 0.5f * (box.hi - box.lo);
-  std::vector<vec3> points;
-  points.reserve(count);
-  while (points.size() < count) {
-    const bool inside = u(rng) < 0.7f;
-    const float scale = inside ? 1.0f : 3.0f;
-    const vec3 p = c + scale * half * vec3(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
-    const bool in_box = glm::all(glm::lessThanEqual(box.lo, p)) && glm::all(glm::lessThanEqual(p, box.hi));
-    if (inside || !in_box) points.push_back(p);
-  }
-  return points;
-}
+// The benchmark's point mix (examples/common/point_mix.h).
+inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) { return point_mix(box, count, seed); }
 
 }  // namespace gwnrt::test

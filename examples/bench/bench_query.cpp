@@ -16,27 +16,12 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
+#include "point_mix.h"
 
 namespace {
 
 using namespace gwnrt;
 using clock_type = std::chrono::steady_clock;
-
-// 70% uniform in the mesh box, 30% uniform in the box scaled 3× about its centre but outside it.
-std::vector<vec3> point_mix(const Aabb& box, size_t count, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), coin(0.0f, 1.0f);
-  const vec3 c = box.centre(), half = 0.5f * (box.hi - box.lo);
-  std::vector<vec3> points;
-  points.reserve(count);
-  while (points.size() < count) {
-    const bool inside = coin(rng) < 0.7f;
-    const vec3 p = c + (inside ? 1.0f : 3.0f) * half * vec3(u(rng), u(rng), u(rng));
-    const bool in_box = glm::all(glm::lessThanEqual(box.lo, p)) && glm::all(glm::lessThanEqual(p, box.hi));
-    if (inside || !in_box) points.push_back(p);
-  }
-  return points;
-}
 
 struct Row {
   std::string mode;
