@@ -134,6 +134,7 @@ class MomentBuilder {
     RawMoments total;
     dvec3 weighted{0.0}, plain{0.0};
     int used = 0;
+    double corner[kBvhWidth] = {};  // farthest corner of each lane's box from the lane's centre
     for (int i = 0; i < kBvhWidth; ++i) {
       if (node.child[i] == kEmptyLane) {
         // An empty lane is never far (NaN centre) and is skipped when near.
@@ -142,7 +143,8 @@ class MomentBuilder {
       }
       // A leaf's ball passes through the farthest corner of its box; an inner lane's radius
       // was set by node_moments from its children.
-      if (node.count[i] > 0) lanes[i].radius = farthest_corner(node, i, lanes[i].centre);
+      corner[i] = farthest_corner(node, i, lanes[i].centre);
+      if (node.count[i] > 0) lanes[i].radius = corner[i];
       store_lane(lanes[i], i, ex, o1, o2);
       weighted += lanes[i].area * lanes[i].centre;
       plain += lanes[i].centre;
@@ -163,8 +165,7 @@ class MomentBuilder {
     // depth and costs twice the work for the same error.
     for (int i = 0; i < kBvhWidth; ++i) {
       if (node.child[i] == kEmptyLane) continue;
-      total.radius = std::max(total.radius, glm::length(lanes[i].centre - total.centre) +
-                                                farthest_corner(node, i, lanes[i].centre));
+      total.radius = std::max(total.radius, glm::length(lanes[i].centre - total.centre) + corner[i]);
       lanes[i].shift_to(total.centre);
       total.add(lanes[i]);
     }
