@@ -1,5 +1,6 @@
 #include "gwnrt/batch.h"
 
+#include <cmath>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -24,6 +25,33 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
   const ModelView view = model_view(model);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) results[i] = evaluate_point(view, points[i], request);
+    if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
+  });
+  return Status::Ok();
+}
+
+Status validate_trace_options(const TraceOptions& options) {
+  if (options.mode != TraceMode::kWindingNumber && options.mode != TraceMode::kSolidAngle)
+    return {StatusCode::kInvalidArgument, "trace mode must be winding-number or solid-angle"};
+  if (!std::isfinite(options.level)) return {StatusCode::kInvalidArgument, "trace level must be a finite number"};
+  if (!(options.epsilon > 0.0f) || !(options.epsilon < 1.0f))
+    return {StatusCode::kInvalidArgument, "trace epsilon must lie in (0, 1) (it is relative to the box diagonal)"};
+  if (!(options.beta > 0.0f) || !(options.beta < kInfinity))
+    return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
+  if (options.max_steps == 0 || options.max_crossings == 0)
+    return {StatusCode::kInvalidArgument, "step and crossing caps must be at least 1"};
+  return Status::Ok();
+}
+
+Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options,
+                  std::span<RayHit> hits, std::atomic<size_t>* progress) {
+  if (rays.size() != hits.size())
+    return {StatusCode::kInvalidArgument, "trace_rays: " + std::to_string(rays.size()) + " rays but " +
+                                              std::to_string(hits.size()) + " hit slots"};
+  if (Status s = validate_trace_options(options); !s.ok()) return s;
+  const ModelView view = model_view(model);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) hits[i] = trace_surface(view, rays[i], options);
     if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
   });
   return Status::Ok();

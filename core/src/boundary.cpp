@@ -75,6 +75,20 @@ BoundaryCurve extract_boundary(const Mesh& mesh) {
   return curve;
 }
 
+Mesh boundary_cone(const BoundaryCurve& curve) {
+  Mesh cone;
+  const size_t n = curve.segment_count();
+  if (n == 0) return cone;
+  dvec3 sum(0.0);
+  for (const vec3& p : curve.endpoints) sum += dvec3(p);
+  cone.positions.reserve(2 * n + 1);
+  cone.positions.push_back(vec3(sum / double(curve.endpoints.size())));
+  cone.positions.insert(cone.positions.end(), curve.endpoints.begin(), curve.endpoints.end());
+  cone.triangles.reserve(n);
+  for (uint32_t s = 0; s < n; ++s) cone.triangles.push_back({0u, 1 + 2 * s, 2 + 2 * s});
+  return cone;
+}
+
 SegmentTreeView SegmentTree::view() const {
   return {bvh.view(), endpoints.data(), segment_ids.data(), uint32_t(segment_ids.size())};
 }

@@ -73,9 +73,6 @@ std::string quoted(string_view tok) {
 // ---------------------------------------------------------------------------------------
 // Numbers
 
-// A bit test rather than std::isfinite: under -ffast-math the compiler may assume that no
-// NaN or infinity exists and fold std::isfinite to true, which would disable this check.
-bool is_finite(float f) { return (std::bit_cast<uint32_t>(f) & 0x7f800000u) != 0x7f800000u; }
 
 // std::from_chars rejects the leading '+' that some exporters write.
 string_view drop_plus(string_view s) {

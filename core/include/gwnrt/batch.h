@@ -1,4 +1,5 @@
-// TBB batch drivers: evaluate_point over many points, in parallel, results in input order.
+// TBB batch drivers: evaluate_point over many points and trace_surface over many rays, in
+// parallel, results in input order.
 #pragma once
 
 #include <atomic>
@@ -6,10 +7,11 @@
 
 #include "gwnrt/model.h"
 #include "gwnrt/point_query.h"
+#include "gwnrt/surface_trace.h"
 
 namespace gwnrt {
 
-inline ModelView model_view(const GwnModel& model) { return {model.triangle_view(), model.boundary_view()}; }
+inline ModelView model_view(const GwnModel& model) { return model.view(); }
 
 // results.size() must equal points.size(). `progress`, when given, counts finished points
 // (for a progress bar on another thread). Fails on a size mismatch, a bad order or a beta <= 0.
@@ -17,5 +19,13 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
                        std::span<PointResult> results, std::atomic<size_t>* progress = nullptr);
 
 Status validate_request(const QueryRequest& request);
+
+// hits.size() must equal rays.size(). Invalid rays (non-finite, zero direction) are not an
+// error of the batch: their hit has `invalid` set. Fails on a size mismatch or bad options.
+Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options,
+                  std::span<RayHit> hits, std::atomic<size_t>* progress = nullptr);
+
+// Level finite, epsilon and beta finite and > 0, caps > 0.
+Status validate_trace_options(const TraceOptions& options);
 
 }  // namespace gwnrt

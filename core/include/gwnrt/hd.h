@@ -25,6 +25,7 @@ using uvec3 = glm::uvec3;
 
 inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr float kInv4Pi = float(0.25 / kPi);
+inline constexpr float kInfinityF = __builtin_huge_valf();
 
 // Symmetric 3x3 matrix stored as its six independent entries (xx, xy, xz, yy, yz, zz).
 template <class T>
@@ -41,5 +42,17 @@ using sym3 = Sym3<float>;
 
 template <class T>
 GWNRT_HD inline T sqr(T x) { return x * x; }
+
+// A bit test rather than std::isfinite: under -ffast-math the compiler may assume that no NaN
+// or infinity exists and fold std::isfinite to true, which would disable input checks. It also
+// reads the same on the host and the device.
+GWNRT_HD inline bool is_finite(float x) {
+#if defined(__CUDA_ARCH__)
+  return (__float_as_uint(x) & 0x7f800000u) != 0x7f800000u;
+#else
+  return (__builtin_bit_cast(uint32_t, x) & 0x7f800000u) != 0x7f800000u;
+#endif
+}
+GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinityF && x != -kInfinityF; }
 
 }  // namespace gwnrt

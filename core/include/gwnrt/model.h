@@ -9,6 +9,7 @@
 
 #include "gwnrt/bvh.h"
 #include "gwnrt/mesh.h"
+#include "gwnrt/model_view.h"
 #include "gwnrt/status.h"
 
 namespace gwnrt {
@@ -40,6 +41,10 @@ struct BoundaryCurve {
 };
 BoundaryCurve extract_boundary(const Mesh& mesh);
 
+// The cone C over ∂M (see ModelView::cone): one triangle (z, a, b) per segment a→b, with a and
+// b the very same floats as the curve's (so crossings of M and C agree on shared edges).
+Mesh boundary_cone(const BoundaryCurve& curve);
+
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
 SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
 
@@ -64,6 +69,10 @@ class GwnModel {
   const SegmentTree& boundary_tree() const { return boundary_tree_; }
   TriangleTreeView triangle_view() const { return triangles_.view(); }
   SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
+  const TriangleTree& cone_tree() const { return cone_; }
+  const Aabb& bounds() const { return bounds_; }
+  float surface_margin() const { return surface_margin_; }
+  ModelView view() const;
   const BuildTimings& timings() const { return timings_; }
 
  private:
@@ -71,6 +80,9 @@ class GwnModel {
   TriangleTree triangles_;
   BoundaryCurve boundary_;
   SegmentTree boundary_tree_;
+  TriangleTree cone_;
+  Aabb bounds_;
+  float surface_margin_ = 0;
   BuildTimings timings_;
 };
 

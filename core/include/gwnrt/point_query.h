@@ -3,6 +3,7 @@
 #pragma once
 
 #include "gwnrt/distance.h"
+#include "gwnrt/model_view.h"
 #include "gwnrt/winding_number.h"
 
 namespace gwnrt {
@@ -30,11 +31,6 @@ struct PointResult {
   float bary_u = 0, bary_v = 0;          // of the closest point on nearest_triangle
   float boundary_distance = 0;           // +inf for a closed mesh
   uint32_t nearest_boundary_segment = kEmptyLane;
-};
-
-struct ModelView {
-  TriangleTreeView triangles;
-  SegmentTreeView boundary;
 };
 
 GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x, const QueryRequest& request) {

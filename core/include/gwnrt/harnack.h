@@ -1,0 +1,52 @@
+// Where a ray steps: the Harnack bound on how far a harmonic function can be followed before it
+// may reach a target level (Gillespie, Yang, Botsch, Crane 2024, Eq. 7 and Algorithm 2).
+// Host-and-device.
+#pragma once
+
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+// The largest step from a point where a harmonic function has value f, known to stay above c
+// on the ball of radius `radius` around the point, that cannot reach the value `target`.
+// Written as 2R|1 - a| / (a + 2 + sqrt(a² + 8a)), a = (f - c)/(target - c): the paper's
+// (R/2)|a + 2 - sqrt(a² + 8a)| without its cancellation near a = 1 (the last steps before a hit).
+GWNRT_HD inline float harnack_step(float radius, float f, float target, float c) {
+  if (!(target > c)) return radius;  // the target lies below the bound: nowhere in the ball
+  const float a = (f - c) / (target - c);
+  return 2.0f * radius * fabsf(1.0f - a) / (a + 2.0f + sqrtf(a * (a + 8.0f)));
+}
+
+// Levels of an angle-valued function with period 1 (here φ = w mod 1 ∈ [0, 1)): the values
+// phase + k, k integer, phase ∈ [0, 1). `below` <= φ < `above` = below + 1.
+struct LevelBracket {
+  float below, above;
+};
+
+GWNRT_HD inline LevelBracket bracket_levels(float phi, float phase) {
+  const float below = phase + floorf(phi - phase);
+  return {below, below + 1.0f};
+}
+
+// The lift of φ on a ball that avoids ∂M is harmonic; as in the paper's Algorithm 2 it is taken
+// to stay above φ's own range shifted down by one period, c = -1 (-4π for Ω). The step is the
+// smaller of the steps toward the levels just below and just above.
+inline constexpr float kAngleLowerBound = -1.0f;
+
+GWNRT_HD inline float angle_valued_step(float radius, float phi, const LevelBracket& levels) {
+  return fminf(harnack_step(radius, phi, levels.below, kAngleLowerBound),
+               harnack_step(radius, phi, levels.above, kAngleLowerBound));
+}
+
+// A bound on |∇φ| from the same ball: a positive harmonic u on a ball of radius R in 3D has
+// |∇u(centre)| <= 3 u(centre) / R. The tracer evaluates the gradient for its stopping test only
+// where this bound says the test could pass.
+GWNRT_HD inline float harnack_gradient_bound(float radius, float phi) {
+  return 3.0f * (phi - kAngleLowerBound) / radius;
+}
+
+// Over-stepping (the paper's §3.1.4): try this multiple of the safe step; the longer step is
+// kept only when the safe balls of both of its ends cover it.
+inline constexpr float kOverstepFactor = 1.75f;
+
+}  // namespace gwnrt

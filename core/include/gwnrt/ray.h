@@ -1,0 +1,224 @@
+// Rays against the triangle BVH: a watertight ray–triangle crossing test whose ties (a ray
+// exactly through an edge or a vertex) are broken by one fixed symbolic perturbation of the
+// ray, and the two walks the tracer needs: the next crossing after a given one, in (t, index)
+// order, and the signed count of crossings on an interval. Host-and-device.
+//
+// Why the perturbation: the tracer counts crossings to know the integer part of w, so a ray
+// through an edge shared by two triangles must count it exactly once (and a ray through a
+// vertex once per sheet through that vertex). The perturbed ray is a translate of the real
+// one by (δ, δ²) in the plane orthogonal to it, δ → 0+; every triangle sees the same translate,
+// so the counts are those of an honest ray and w stays consistent.
+#pragma once
+
+#include "gwnrt/bvh.h"
+#include "gwnrt/distance.h"
+
+namespace gwnrt {
+
+struct Ray {
+  vec3 origin{0.0f};
+  vec3 direction{0.0f, 0.0f, 1.0f};  // any nonzero length; t is measured in its units
+  float tnear = 0.0f;
+  float tfar = kInfinity;
+};
+
+// Per-ray constants of the watertight test (Woop, Benthin, Wald 2013): the axis most aligned
+// with the direction becomes z, and a shear maps the direction onto it.
+struct RayFrame {
+  vec3 origin;
+  vec3 inv_direction;  // for slab tests; zero components replaced by a huge finite value
+  int kx, ky, kz;
+  float sx, sy, sz;
+};
+
+GWNRT_HD inline RayFrame make_ray_frame(const vec3& origin, const vec3& direction) {
+  RayFrame f;
+  f.origin = origin;
+  const vec3 ad = glm::abs(direction);
+  f.kz = ad.x >= ad.y ? (ad.x >= ad.z ? 0 : 2) : (ad.y >= ad.z ? 1 : 2);
+  f.kx = f.kz == 2 ? 0 : f.kz + 1;
+  f.ky = f.kx == 2 ? 0 : f.kx + 1;
+  if (direction[f.kz] < 0) {  // keep the projected winding
+    const int k = f.kx;
+    f.kx = f.ky;
+    f.ky = k;
+  }
+  f.sx = direction[f.kx] / direction[f.kz];
+  f.sy = direction[f.ky] / direction[f.kz];
+  f.sz = 1.0f / direction[f.kz];
+  for (int a = 0; a < 3; ++a) {
+    // 1/0 = inf would give 0·inf = NaN for an origin on a slab plane; a huge finite value
+    // gives the same answer everywhere else.
+    const float d = direction[a];
+    f.inv_direction[a] = d != 0.0f ? 1.0f / d : (d < 0.0f ? -1e30f : 1e30f);
+  }
+  return f;
+}
+
+namespace detail {
+
+// Sign of the projected edge function Qx·Py − Qy·Px at the (perturbed) ray. The products of
+// floats are exact in double, so the value for edge P→Q is exactly the negation of the value
+// for Q→P whatever the compiler contracts; the perturbation keeps that antisymmetry.
+GWNRT_HD GWNRT_FORCEINLINE int edge_sign(float px, float py, float qx, float qy, double& value) {
+  value = double(qx) * double(py) - double(qy) * double(px);
+  if (value != 0.0) return value > 0 ? 1 : -1;
+  const float dy = qy - py;
+  if (dy != 0.0f) return dy > 0 ? 1 : -1;
+  const float dx = px - qx;
+  return dx > 0 ? 1 : (dx < 0 ? -1 : 0);
+}
+
+}  // namespace detail
+
+// Where the (perturbed) ray's line crosses triangle (p0, p1, p2): t along the frame's direction
+// (any t, also negative), and the jump of w there: +1 when the line passes from the side the
+// normal (p1-p0)×(p2-p0) points to onto the other side, -1 the other way. Edge-on and
+// zero-area triangles are never crossed (they carry no jump of w).
+GWNRT_HD GWNRT_FORCEINLINE bool triangle_crossing(const RayFrame& f, const vec3& p0, const vec3& p1, const vec3& p2,
+                                                  float& t, int& jump) {
+  const vec3 a = p0 - f.origin, b = p1 - f.origin, c = p2 - f.origin;
+  const float ax = a[f.kx] - f.sx * a[f.kz], ay = a[f.ky] - f.sy * a[f.kz];
+  const float bx = b[f.kx] - f.sx * b[f.kz], by = b[f.ky] - f.sy * b[f.kz];
+  const float cx = c[f.kx] - f.sx * c[f.kz], cy = c[f.ky] - f.sy * c[f.kz];
+  double u, v, w;
+  const int su = detail::edge_sign(bx, by, cx, cy, u);
+  const int sv = detail::edge_sign(cx, cy, ax, ay, v);
+  const int sw = detail::edge_sign(ax, ay, bx, by, w);
+  if (su == 0 || su != sv || su != sw) return false;
+  const double det = u + v + w;
+  if (det == 0.0) return false;
+  const double tz = u * double(f.sz * a[f.kz]) + v * double(f.sz * b[f.kz]) + w * double(f.sz * c[f.kz]);
+  t = float(tz / det);
+  // det > 0: the triangle winds counter-clockwise seen from the origin looking along the ray,
+  // so its normal faces the origin and the line goes from front to back.
+  jump = det > 0 ? 1 : -1;
+  return true;
+}
+
+// Slab test of one BVH lane against [t_lo, t_hi]; returns the entry distance or +inf on a miss.
+// The exit is widened by a few ulps so that round-off never drops a triangle whose own test
+// hits (the robust bound of pbrt's ray-box test).
+GWNRT_HD GWNRT_FORCEINLINE float lane_entry(const WideNode& node, int lane, const RayFrame& f, float t_lo, float t_hi) {
+  float t0 = t_lo, t1 = t_hi;
+  for (int k = 0; k < 3; ++k) {
+    float a = (node.lo[k][lane] - f.origin[k]) * f.inv_direction[k];
+    float b = (node.hi[k][lane] - f.origin[k]) * f.inv_direction[k];
+    if (a > b) {
+      const float s = a;
+      a = b;
+      b = s;
+    }
+    a -= fabsf(a) * 4e-7f;
+    b += fabsf(b) * 4e-7f;
+    t0 = a > t0 ? a : t0;
+    t1 = b < t1 ? b : t1;
+  }
+  return t0 <= t1 ? t0 : kInfinity;
+}
+
+struct CrossingHit {
+  float t = kInfinity;
+  uint32_t index = kEmptyLane;  // leaf-order triangle index
+  int jump = 0;
+};
+
+// The first crossing after (t_after, index_after) in lexicographic (t, leaf index) order, with
+// t <= t_max; index_after = kEmptyLane means "from t_after on, inclusive". Visiting crossings
+// one by one this way meets each exactly once, also several at the same t (stacked copies).
+GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_after,
+                                   uint32_t index_after, float t_max, CrossingHit& out) {
+  out = CrossingHit{};
+  if (bvh.node_count == 0) return false;
+  float best_t = t_max;
+  bool found = false;
+  struct Entry {
+    uint32_t node;
+    float t;
+  };
+  Entry stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = {0, t_after};
+  while (sp > 0) {
+    const Entry e = stack[--sp];
+    if (e.t > best_t) continue;
+    const WideNode& node = bvh.nodes[e.node];
+    Entry inner[kBvhWidth];
+    int inner_count = 0;
+    for (int l = 0; l < kBvhWidth; ++l) {
+      if (node.child[l] == kEmptyLane) continue;
+      const float entry = lane_entry(node, l, f, t_after, best_t);
+      if (entry == kInfinity) continue;
+      if (node.count[l] == 0) {
+        inner[inner_count++] = {node.child[l], entry};
+        continue;
+      }
+      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
+        float t;
+        int jump;
+        if (!triangle_crossing(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump)) continue;
+        const bool after = t > t_after || (t == t_after && (index_after == kEmptyLane || i > index_after));
+        const bool better = t < best_t || (t == best_t && (!found || i < out.index));
+        if (after && better) {
+          best_t = t;
+          out = {t, i, jump};
+          found = true;
+        }
+      }
+    }
+    for (int i = 1; i < inner_count; ++i)  // farthest pushed first: nearest visited next
+      for (int j = i; j > 0 && inner[j].t > inner[j - 1].t; --j) {
+        const Entry s = inner[j];
+        inner[j] = inner[j - 1];
+        inner[j - 1] = s;
+      }
+    for (int i = 0; i < inner_count; ++i) stack[sp++] = inner[i];
+  }
+  return found;
+}
+
+// Σ jumps of the crossings with t in [t_lo, t_hi).
+GWNRT_HD inline int crossing_sum(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_lo, float t_hi) {
+  if (bvh.node_count == 0 || !(t_lo < t_hi)) return 0;
+  int sum = 0;
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const WideNode& node = bvh.nodes[stack[--sp]];
+    for (int l = 0; l < kBvhWidth; ++l) {
+      if (node.child[l] == kEmptyLane || lane_entry(node, l, f, t_lo, t_hi) == kInfinity) continue;
+      if (node.count[l] == 0) {
+        stack[sp++] = node.child[l];
+        continue;
+      }
+      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
+        float t;
+        int jump;
+        if (triangle_crossing(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump) && t >= t_lo &&
+            t < t_hi)
+          sum += jump;
+      }
+    }
+  }
+  return sum;
+}
+
+// [t0, t1] of the line inside box b (t0 > t1: no overlap).
+GWNRT_HD inline void clip_to_box(const RayFrame& f, const Aabb& b, float& t0, float& t1) {
+  t0 = -kInfinity;
+  t1 = kInfinity;
+  for (int k = 0; k < 3; ++k) {
+    float a = (b.lo[k] - f.origin[k]) * f.inv_direction[k];
+    float c = (b.hi[k] - f.origin[k]) * f.inv_direction[k];
+    if (a > c) {
+      const float s = a;
+      a = c;
+      c = s;
+    }
+    t0 = a > t0 ? a : t0;
+    t1 = c < t1 ? c : t1;
+  }
+}
+
+}  // namespace gwnrt

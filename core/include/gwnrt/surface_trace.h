@@ -1,0 +1,257 @@
+// Ray first-hit on S = ∂{w > w*} (DESIGN §1, §3), and on level sets of Ω mod 4π (solid-angle
+// mode). Host-and-device: the TBB driver, the renderer and the CUDA kernel all call trace_surface.
+//
+// Along a ray, w = (its band, an integer) + φ, φ = w mod 1. φ is continuous across M and
+// harmonic off ∂M; it is evaluated on the cone C (ModelView::cone), whose size is that of ∂M.
+// The ray is followed by two monotone walks, merged in t order:
+//  - the crossings of M, exact and in order (ray.h): each moves w by ±1; one that moves w across
+//    w* is a sheet hit;
+//  - Harnack steps on φ with R = distance to ∂M (harnack.h): every step is free of levels
+//    w* + k; where the march converges on a level that w itself crosses at w*, it is a smooth hit;
+//    other levels (w* ± 1, ...) are stepped across and move the band.
+// A closed mesh has no ∂M, so no Harnack steps: the trace is one walk over its crossings.
+#pragma once
+
+#include "gwnrt/harnack.h"
+#include "gwnrt/model_view.h"
+#include "gwnrt/ray.h"
+#include "gwnrt/winding_number.h"
+
+namespace gwnrt {
+
+enum class TraceMode : uint32_t {
+  kWindingNumber = 0,  // S = ∂{w > level}: sheets and smooth pieces
+  kSolidAngle = 1,     // {Ω ≡ 4π·level mod 4π}: smooth pieces only (the paper's nonplanar polygons)
+};
+
+struct TraceOptions {
+  TraceMode mode = TraceMode::kWindingNumber;
+  float level = 0.5f;         // w*; in solid-angle mode Ω*/(4π) (2π ↔ 0.5)
+  float epsilon = 1e-5f;      // stopping distance, relative to the box diagonal of M
+  uint32_t max_steps = 4096;  // Harnack evaluations per ray
+  uint32_t max_crossings = 1u << 16;
+  float beta = 2.0f;          // accuracy of the multipole evaluation of φ on the cone
+  bool overstep = true;
+  bool exact = false;         // φ by the double brute-force sum over the cone (reference, slow)
+};
+
+enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
+
+struct RayHit {
+  bool hit = false;
+  bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
+  bool invalid = false;  // rejected input: non-finite numbers or a zero direction
+  HitKind kind = HitKind::kNone;
+  float t = kInfinity;   // in units of the ray's own direction
+  vec3 position{0.0f};
+  vec3 normal{0.0f};     // unit, outward: from {w > w*} toward {w < w*}
+  uint32_t triangle = kEmptyLane;  // input index, sheet hits
+  uint32_t steps = 0;      // Harnack evaluations of φ
+  uint32_t crossings = 0;  // triangle crossings walked
+};
+
+namespace detail {
+
+// w_C at x (φ = its fractional part), optionally ∇w (= ∇w_C off M ∪ C).
+GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const vec3& x, const TraceOptions& o,
+                                          vec3* gradient) {
+  if (o.exact) {
+    const WindingSampleExact s = winding_number_exact(cone, x, gradient != nullptr);
+    if (gradient) *gradient = vec3(s.gradient);
+    return float(s.w);
+  }
+  if (gradient) {
+    const WindingSample s = winding_number_taylor<2, true, false>(cone, x, o.beta);
+    *gradient = s.gradient;
+    return s.w;
+  }
+  return winding_number_taylor<2, false, false>(cone, x, o.beta).w;
+}
+
+GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
+
+class SurfaceTracer {
+ public:
+  GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o) : m_(m), o_(o) {
+    const float len = glm::length(ray.direction);
+    if (!finite3(ray.origin) || !finite3(ray.direction) || !(len > 0.0f) || !is_finite(len) || is_nan(ray.tnear) ||
+        is_nan(ray.tfar)) {
+      hit_.invalid = true;
+      return;
+    }
+    len_ = len;
+    dir_ = ray.direction / len;
+    frame_ = make_ray_frame(ray.origin, dir_);
+    t_near_ = ray.tnear * len;
+    t_far_ = ray.tfar * len;
+    sheets_ = o.mode == TraceMode::kWindingNumber;
+    smooth_ = m.cone.triangle_count > 0;
+    const vec3 extent = m.bounds.hi - m.bounds.lo;
+    eps_ = o.epsilon * glm::length(extent);
+    phase_ = o.level - floorf(o.level);
+  }
+
+  GWNRT_HD RayHit run() {
+    if (hit_.invalid || !(sheets_ || smooth_)) return hit_;
+    Aabb grown = m_.bounds;
+    grown.lo -= vec3(m_.surface_margin);
+    grown.hi += vec3(m_.surface_margin);
+    float g0, g1;
+    clip_to_box(frame_, grown, g0, g1);
+    if (!(g0 <= g1) || g1 < t_near_ || g0 > t_far_ || !(t_near_ <= t_far_)) return hit_;
+    const float t_start = fmaxf(t_near_, g0);
+    t_end_ = fminf(t_far_, g1);
+    float w_start = 0.0f;
+    if (smooth_) w_start = cone_winding_number(m_.cone, point(t_start), o_, nullptr);
+    if (sheets_) {
+      // The integer part of w at the start: crossings of the closed M − C since the line entered
+      // the grown box, where w = w_C.
+      const int crossed = crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, g0, t_start) -
+                          crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, g0, t_start);
+      band_ = int(floorf(w_start + float(crossed) - o_.level));
+      have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, t_start, kEmptyLane, t_end_, next_);
+    }
+    if (!smooth_) {
+      walk_crossings_until(t_end_);
+      return hit_;
+    }
+    march(t_start, w_start);
+    return hit_;
+  }
+
+ private:
+  GWNRT_HD vec3 point(float t) const { return frame_.origin + t * dir_; }
+
+  GWNRT_HD void report(float t, HitKind kind, const vec3& normal, uint32_t triangle) {
+    hit_.hit = true;
+    hit_.kind = kind;
+    hit_.t = t / len_;
+    hit_.position = point(t);
+    hit_.normal = normal;
+    hit_.triangle = triangle;
+  }
+
+  // Applies the crossings with t <= t_limit in order; true when one of them is a sheet hit (or
+  // the crossing cap ended the trace).
+  GWNRT_HD bool walk_crossings_until(float t_limit) {
+    while (have_next_ && next_.t <= t_limit) {
+      if (++hit_.crossings > o_.max_crossings) {
+        hit_.crossings = o_.max_crossings;
+        hit_.capped = true;
+        return true;
+      }
+      const int band = band_ + next_.jump;
+      if ((band_ < 0) != (band < 0)) {
+        const uint32_t i = next_.index;
+        const vec3 *v = m_.triangles.vertices + 3 * i;
+        vec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+        n /= glm::length(n);
+        // Entering {w > w*} the outside is behind the ray, leaving it the outside is ahead.
+        const bool entering = band >= 0;
+        if ((glm::dot(n, dir_) > 0.0f) == entering) n = -n;
+        report(next_.t, HitKind::kSheet, n, m_.triangles.triangle_ids[i]);
+        return true;
+      }
+      band_ = band;
+      have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, next_.t, next_.index, t_end_, next_);
+    }
+    return false;
+  }
+
+  GWNRT_HD void march(float t, float w_at_t) {
+    float t_prev = t, rho_prev = 0.0f;
+    bool overstepped = false;
+    bool have_w = true;  // w_at_t is the value at t (the start reuses the band's evaluation)
+    int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
+    float pending_level = 0.0f, pending_phi = 0.0f;
+    for (;;) {
+      if (hit_.steps >= o_.max_steps) {
+        hit_.capped = true;
+        return;
+      }
+      ++hit_.steps;
+      const vec3 x = point(t);
+      const float w = have_w ? w_at_t : cone_winding_number(m_.cone, x, o_, nullptr);
+      have_w = false;
+      const float phi = w - floorf(w);
+      const float radius = boundary_distance(m_.boundary, x).distance;
+      const LevelBracket levels = bracket_levels(phi, phase_);
+      const float rho = angle_valued_step(radius, phi, levels);
+      if (overstepped && t - t_prev > rho_prev + rho) {  // the long step was not covered
+        t = t_prev + rho_prev;
+        overstepped = false;
+        continue;
+      }
+      overstepped = false;
+      // No level lies in (t_prev, t): the crossings there come first.
+      if (sheets_ && walk_crossings_until(t)) return;
+      if (pending != 0) {
+        float d = phi - pending_phi;
+        d -= floorf(d + 0.5f);  // the change since the level, unwrapped (it is small)
+        const float lifted = pending_phi + d;
+        if (pending > 0 ? lifted >= pending_level : lifted <= pending_level) band_ += pending;
+        pending = 0;
+      }
+      const float gap_below = phi - levels.below, gap_above = levels.above - phi;
+      const float gap = fminf(gap_below, gap_above);
+      if (gap <= eps_ * harnack_gradient_bound(radius, phi)) {
+        vec3 g;
+        cone_winding_number(m_.cone, x, o_, &g);
+        const float gn = glm::length(g);
+        if (gap <= eps_ * gn) {
+          const bool at_above = gap_above <= gap_below;
+          const float rate = glm::dot(g, dir_);  // dw/dt
+          if (at_above ? rate > 0.0f : rate < 0.0f) {
+            const int step = at_above ? 1 : -1;
+            if (!sheets_ || (band_ < 0) != (band_ + step < 0)) {
+              report(t, HitKind::kSmooth, -g / gn, kEmptyLane);
+              return;
+            }
+            // A level of w other than w*: step across it and check on the far side.
+            pending = step;
+            pending_level = at_above ? levels.above : levels.below;
+            pending_phi = phi;
+            t += fminf(2.0f * gap / fabsf(rate) + eps_, 10.0f * eps_);
+          } else {
+            t += fmaxf(rho, eps_);  // moving away from the level (or grazing it): no crossing
+          }
+          t_prev = t;
+          rho_prev = 0.0f;
+          if (t > t_end_) break;
+          continue;
+        }
+      }
+      if (t >= t_end_) break;
+      const float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
+      if (t + safe >= t_end_) break;
+      t_prev = t;
+      rho_prev = safe;
+      if (o_.overstep) {
+        t = fminf(t + kOverstepFactor * safe, t_end_);
+        overstepped = true;
+      } else {
+        t += safe;
+      }
+    }
+    if (sheets_) walk_crossings_until(t_end_);
+  }
+
+  const ModelView& m_;
+  const TraceOptions& o_;
+  RayHit hit_;
+  RayFrame frame_{};
+  vec3 dir_{0.0f};
+  float len_ = 1.0f, t_near_ = 0.0f, t_far_ = 0.0f, t_end_ = 0.0f, eps_ = 0.0f, phase_ = 0.5f;
+  bool sheets_ = false, smooth_ = false;
+  int band_ = 0;  // floor(w - w*) just after the last event
+  bool have_next_ = false;
+  CrossingHit next_;
+};
+
+}  // namespace detail
+
+GWNRT_HD inline RayHit trace_surface(const ModelView& model, const Ray& ray, const TraceOptions& options) {
+  return detail::SurfaceTracer(model, ray, options).run();
+}
+
+}  // namespace gwnrt
