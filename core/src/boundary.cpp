@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <span>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -75,17 +76,55 @@ BoundaryCurve extract_boundary(const Mesh& mesh) {
   return curve;
 }
 
-Mesh boundary_cone(const BoundaryCurve& curve) {
+std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_count) {
+  // Union-find over endpoints matched by exact position (the curve's endpoints are copies of
+  // welded vertices, so equal positions are the same vertex).
+  const size_t n = curve.segment_count();
+  std::vector<uint32_t> parent(2 * n);
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::vector<uint32_t> order(2 * n);
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint32_t i) {
+    const vec3 p = curve.endpoints[i] + vec3(0.0f);  // -0 + 0 = +0
+    return std::array<float, 3>{p.x, p.y, p.z};
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  auto unite = [&](uint32_t a, uint32_t b) { parent[find(a)] = find(b); };
+  for (size_t i = 1; i < order.size(); ++i)
+    if (key(order[i]) == key(order[i - 1])) unite(order[i], order[i - 1]);
+  for (uint32_t s = 0; s < n; ++s) unite(2 * s, 2 * s + 1);
+  std::vector<uint32_t> loop(n), id(2 * n, kEmptyLane);
+  loop_count = 0;
+  for (uint32_t s = 0; s < n; ++s) {
+    uint32_t& r = id[find(2 * s)];
+    if (r == kEmptyLane) r = loop_count++;
+    loop[s] = r;
+  }
+  return loop;
+}
+
+Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count) {
   Mesh cone;
   const size_t n = curve.segment_count();
   if (n == 0) return cone;
-  dvec3 sum(0.0);
-  for (const vec3& p : curve.endpoints) sum += dvec3(p);
-  cone.positions.reserve(2 * n + 1);
-  cone.positions.push_back(vec3(sum / double(curve.endpoints.size())));
+  // One apex per loop, the mean of its endpoints: the fan then stays inside the loop's box
+  // (its convex hull), which is what bounds where smooth pieces can be.
+  std::vector<dvec3> sum(loop_count, dvec3(0.0));
+  std::vector<double> count(loop_count, 0.0);
+  for (size_t s = 0; s < n; ++s) {
+    sum[loop_of_segment[s]] += dvec3(curve.endpoints[2 * s]) + dvec3(curve.endpoints[2 * s + 1]);
+    count[loop_of_segment[s]] += 2;
+  }
+  cone.positions.reserve(2 * n + loop_count);
   cone.positions.insert(cone.positions.end(), curve.endpoints.begin(), curve.endpoints.end());
+  for (uint32_t l = 0; l < loop_count; ++l) cone.positions.push_back(vec3(sum[l] / count[l]));
   cone.triangles.reserve(n);
-  for (uint32_t s = 0; s < n; ++s) cone.triangles.push_back({0u, 1 + 2 * s, 2 + 2 * s});
+  for (uint32_t s = 0; s < n; ++s)
+    cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
   return cone;
 }
 

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -5,6 +6,51 @@
 #include "gwnrt/model.h"
 
 namespace gwnrt {
+namespace {
+
+// SmoothRegion per group of loops (see model_view.h). Groups: the loops themselves, or, beyond
+// kMaxSmoothRegions, runs of loops sorted along the axis where their centres spread most.
+std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vector<uint32_t>& loop_of_segment,
+                                         uint32_t loop_count) {
+  std::vector<Aabb> box(loop_count);
+  std::vector<double> area(loop_count, 0.0);
+  for (size_t s = 0; s < cone.triangles.size(); ++s) {
+    const uvec3 t = cone.triangles[s];
+    const dvec3 p0(cone.positions[t[0]]), p1(cone.positions[t[1]]), p2(cone.positions[t[2]]);
+    const uint32_t l = loop_of_segment[s];
+    area[l] += 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+    for (int k = 0; k < 3; ++k) box[l].extend(cone.positions[t[k]]);
+  }
+  std::vector<uint32_t> group(loop_count);
+  uint32_t group_count = loop_count;
+  if (loop_count > kMaxSmoothRegions) {
+    Aabb centres;
+    for (const Aabb& b : box) centres.extend(b.centre());
+    const vec3 extent = centres.hi - centres.lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    std::vector<uint32_t> order(loop_count);
+    for (uint32_t l = 0; l < loop_count; ++l) order[l] = l;
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return box[a].centre()[axis] < box[b].centre()[axis]; });
+    for (uint32_t i = 0; i < loop_count; ++i) group[order[i]] = uint32_t(uint64_t(i) * kMaxSmoothRegions / loop_count);
+    group_count = kMaxSmoothRegions;
+  } else {
+    for (uint32_t l = 0; l < loop_count; ++l) group[l] = l;
+  }
+  std::vector<SmoothRegion> regions(group_count);
+  std::vector<double> group_area(group_count, 0.0);
+  for (uint32_t l = 0; l < loop_count; ++l) {
+    regions[group[l]].box.extend(box[l]);
+    group_area[group[l]] += area[l];
+  }
+  // Shares λ_r proportional to sqrt(A_r): spread_r = A_r / λ_r = sqrt(A_r) · Σ sqrt(A). Rounded up
+  // by 1% so that float round-off never shrinks the region.
+  double root_sum = 0;
+  for (double a : group_area) root_sum += std::sqrt(a);
+  for (uint32_t r = 0; r < group_count; ++r) regions[r].spread = float(1.01 * std::sqrt(group_area[r]) * root_sum);
+  return regions;
+}
+
+}  // namespace
 
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
@@ -20,7 +66,11 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   auto t1 = clock::now();
   model.boundary_ = extract_boundary(model.mesh_);
   model.boundary_tree_ = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments);
-  model.cone_ = build_triangle_tree(boundary_cone(model.boundary_), options.max_leaf_triangles);
+  uint32_t loop_count = 0;
+  const std::vector<uint32_t> loop_of_segment = boundary_loops(model.boundary_, loop_count);
+  const Mesh cone = boundary_cone(model.boundary_, loop_of_segment, loop_count);
+  model.cone_ = build_triangle_tree(cone, options.max_leaf_triangles);
+  model.smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
   double area = 0;
   for (const uvec3& t : model.mesh_.triangles) {
     const dvec3 p0(model.mesh_.positions[t[0]]), p1(model.mesh_.positions[t[1]]), p2(model.mesh_.positions[t[2]]);
@@ -40,7 +90,8 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
 }
 
 ModelView GwnModel::view() const {
-  return {triangles_.view(), boundary_tree_.view(), cone_.view(), bounds_, surface_margin_};
+  return {triangles_.view(),        boundary_tree_.view(), cone_.view(), smooth_regions_.data(),
+          uint32_t(smooth_regions_.size()), bounds_,             surface_margin_};
 }
 
 }  // namespace gwnrt

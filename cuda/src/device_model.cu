@@ -2,17 +2,41 @@
 #include "gwnrt/cuda.h"
 
 namespace gwnrt::cuda {
+namespace {
 
-struct DeviceModel::Buffers {
-  DeviceBuffer<WideNode> triangle_nodes;
+// One multipole triangle tree in device memory (M itself, and the cone C over ∂M).
+struct DeviceTriangleTree {
+  DeviceBuffer<WideNode> nodes;
   DeviceBuffer<WideNodeExpansion> expansion;
   DeviceBuffer<WideNodeOrder1> order1;
   DeviceBuffer<WideNodeOrder2> order2;
   DeviceBuffer<vec3> vertices;
   DeviceBuffer<uint32_t> triangle_ids;
+
+  // Uploads `tree` and points `view` (the host view of it) at the device copies.
+  Status upload(const TriangleTree& tree, TriangleTreeView& view) {
+    for (Status s : {nodes.upload(tree.bvh.nodes), expansion.upload(tree.expansion), order1.upload(tree.order1),
+                     order2.upload(tree.order2), vertices.upload(tree.vertices), triangle_ids.upload(tree.triangle_ids)})
+      if (!s.ok()) return s;
+    view.bvh.nodes = nodes.get();
+    view.expansion = expansion.get();
+    view.order1 = order1.get();
+    view.order2 = order2.get();
+    view.vertices = vertices.get();
+    view.triangle_ids = triangle_ids.get();
+    return Status::Ok();
+  }
+};
+
+}  // namespace
+
+struct DeviceModel::Buffers {
+  DeviceTriangleTree triangles;
+  DeviceTriangleTree cone;
   DeviceBuffer<WideNode> segment_nodes;
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
+  DeviceBuffer<SmoothRegion> smooth_regions;
   ModelView view;
 };
 
@@ -39,21 +63,16 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   std::string why;
   if (!device_available(&why)) return {StatusCode::kUnavailable, why};
   auto b = std::make_unique<Buffers>();
-  const TriangleTree& tt = model.triangle_tree();
+  // Same views as on the host (counts, bounds), with device pointers in place of host ones.
+  ModelView v = model.view();
+  if (Status s = b->triangles.upload(model.triangle_tree(), v.triangles); !s.ok()) return s;
+  if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
   const SegmentTree& st = model.boundary_tree();
-  for (Status s : {b->triangle_nodes.upload(tt.bvh.nodes), b->expansion.upload(tt.expansion), b->order1.upload(tt.order1),
-                   b->order2.upload(tt.order2), b->vertices.upload(tt.vertices), b->triangle_ids.upload(tt.triangle_ids),
-                   b->segment_nodes.upload(st.bvh.nodes), b->endpoints.upload(st.endpoints),
-                   b->segment_ids.upload(st.segment_ids)})
+  for (Status s : {b->segment_nodes.upload(st.bvh.nodes), b->endpoints.upload(st.endpoints),
+                   b->segment_ids.upload(st.segment_ids),
+                   b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
     if (!s.ok()) return s;
-  // Same views as on the host, with device pointers in place of host ones.
-  ModelView v = model_view(model);
-  v.triangles.bvh.nodes = b->triangle_nodes.get();
-  v.triangles.expansion = b->expansion.get();
-  v.triangles.order1 = b->order1.get();
-  v.triangles.order2 = b->order2.get();
-  v.triangles.vertices = b->vertices.get();
-  v.triangles.triangle_ids = b->triangle_ids.get();
+  v.smooth_regions = b->smooth_regions.get();
   v.boundary.bvh.nodes = b->segment_nodes.get();
   v.boundary.endpoints = b->endpoints.get();
   v.boundary.segment_ids = b->segment_ids.get();

@@ -1,5 +1,5 @@
-// Query points as text: one "x y z" per line, blank lines and '#' comments ignored. Parsing is
-// strict (exactly three finite numbers per line) because a silently skipped or half-read line
+// Points and rays as text: rows of numbers, blank lines and '#' comments ignored. Parsing is
+// strict (the exact count of numbers per line) because a silently skipped or half-read line
 // would shift every later row of the output against its input.
 #pragma once
 
@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -33,10 +34,16 @@ inline bool read_all(std::FILE* f, std::string& out) {
 
 }  // namespace point_io_detail
 
-// Parses `text`; `source` names it in messages ("<source>:<line>: ...").
-inline Status parse_points(std::string_view text, const std::string& source, std::vector<vec3>& points) {
+// Parses `text` as rows of numbers; `source` names it in messages ("<source>:<line>: ...").
+// A row must hold one of `counts` numbers (`layout` describes them in errors); column c may be
+// +/-inf only when `infinite_ok(c)` says so, NaN never. `row(values, count, line)` consumes it.
+template <class InfiniteOk, class RowFn>
+inline Status parse_rows(std::string_view text, const std::string& source, std::initializer_list<int> counts,
+                         const char* layout, InfiniteOk infinite_ok, RowFn row) {
   using namespace point_io_detail;
-  points.clear();
+  constexpr int kMaxColumns = 16;
+  int max_count = 0;
+  for (int c : counts) max_count = c > max_count ? c : max_count;
   size_t line_no = 0;
   size_t pos = 0;
   while (pos < text.size()) {
@@ -49,7 +56,7 @@ inline Status parse_points(std::string_view text, const std::string& source, std
 
     // Built only on failure: one allocation per line would dominate the parse of large files.
     const auto where = [&] { return source + ":" + std::to_string(line_no) + ": "; };
-    float xyz[3];
+    float values[kMaxColumns];
     int count = 0;
     size_t i = 0;
     while (true) {
@@ -59,8 +66,8 @@ inline Status parse_points(std::string_view text, const std::string& source, std
       while (j < line.size() && !is_space(line[j])) ++j;
       std::string_view token = line.substr(i, j - i);
       i = j;
-      if (count == 3) {
-        return {StatusCode::kParseError, where() + "expected 3 numbers (x y z), found more"};
+      if (count == max_count || count == kMaxColumns) {
+        return {StatusCode::kParseError, where() + "expected " + layout + ", found more numbers"};
       }
       // from_chars rejects a leading '+', which people do write.
       std::string_view digits = token;
@@ -81,35 +88,55 @@ inline Status parse_points(std::string_view text, const std::string& source, std
       if (r.ec != std::errc() || r.ptr != last) {
         return {StatusCode::kParseError, where() + "not a number: '" + std::string(token) + "'"};
       }
-      if (!std::isfinite(value)) {
-        return {StatusCode::kParseError, where() + "non-finite coordinate: '" + std::string(token) + "'"};
+      if (std::isnan(value) || (std::isinf(value) && !infinite_ok(count))) {
+        return {StatusCode::kParseError, where() + "non-finite value: '" + std::string(token) + "'"};
       }
-      xyz[count++] = value;
+      values[count++] = value;
     }
     if (count == 0) continue;
-    if (count != 3) {
-      return {StatusCode::kParseError,
-              where() + "expected 3 numbers (x y z), found " + std::to_string(count)};
+    bool allowed = false;
+    for (int c : counts) allowed = allowed || c == count;
+    if (!allowed) {
+      return {StatusCode::kParseError, where() + "expected " + layout + ", found " + std::to_string(count) + " numbers"};
     }
-    points.emplace_back(xyz[0], xyz[1], xyz[2]);
+    if (Status s = row(values, count, line_no); !s.ok()) return {s.code(), where() + s.message()};
   }
+  return Status::Ok();
+}
+
+// Points: exactly three finite numbers per line.
+inline Status parse_points(std::string_view text, const std::string& source, std::vector<vec3>& points) {
+  points.clear();
+  return parse_rows(text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
+                    [&](const float* v, int, size_t) {
+                      points.emplace_back(v[0], v[1], v[2]);
+                      return Status::Ok();
+                    });
+}
+
+// The whole of `path`, or of standard input when `path` is "-"; `source` becomes its name.
+inline Status read_text(const std::string& path, const char* what, std::string& text, std::string& source) {
+  using namespace point_io_detail;
+  text.clear();
+  if (path == "-") {
+    source = "<stdin>";
+    if (!read_all(stdin, text)) return {StatusCode::kIoError, "<stdin>: read error"};
+    return Status::Ok();
+  }
+  source = path;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return {StatusCode::kIoError, path + ": cannot open " + what + ": " + std::strerror(errno)};
+  const bool ok = read_all(f, text);
+  std::fclose(f);
+  if (!ok) return {StatusCode::kIoError, path + ": read error"};
   return Status::Ok();
 }
 
 // Reads points from `path`, or from standard input when `path` is "-".
 inline Status read_points(const std::string& path, std::vector<vec3>& points) {
-  using namespace point_io_detail;
-  std::string text;
-  if (path == "-") {
-    if (!read_all(stdin, text)) return {StatusCode::kIoError, "<stdin>: read error"};
-    return parse_points(text, "<stdin>", points);
-  }
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return {StatusCode::kIoError, path + ": cannot open points file: " + std::strerror(errno)};
-  const bool ok = read_all(f, text);
-  std::fclose(f);
-  if (!ok) return {StatusCode::kIoError, path + ": read error"};
-  return parse_points(text, path, points);
+  std::string text, source;
+  if (Status s = read_text(path, "points file", text, source); !s.ok()) return s;
+  return parse_points(text, source, points);
 }
 
 }  // namespace gwnrt::examples

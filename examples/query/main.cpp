@@ -19,6 +19,7 @@
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
 #include "gwnrt/point_query.h"
+#include "csv_writer.h"
 #include "point_io.h"
 #include "progress_bar.h"
 
@@ -29,6 +30,7 @@
 namespace {
 
 using gwnrt::PointResult;
+using gwnrt::examples::CsvWriter;
 using gwnrt::vec3;
 
 constexpr const char* kProgram = "gwnrt-query";
@@ -65,47 +67,6 @@ std::string valid_field_list() {
   for (const FieldName& f : kFieldNames) list += std::string(list.empty() ? "" : ", ") + f.name;
   return list + ", all";
 }
-
-// Rows are appended to one growing buffer and written in large blocks: with millions of rows,
-// per-value stdio calls would cost more than the evaluation itself.
-class CsvWriter {
- public:
-  explicit CsvWriter(std::FILE* out) : out_(out) { buffer_.reserve(kFlushBytes + 4096); }
-
-  void field(float v) {
-    char buf[32];
-    // Shortest representation that parses back to the same float; to_chars writes "inf"/"-inf".
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    sep();
-    buffer_.append(buf, r.ptr);
-  }
-  void field(const char* text) {
-    sep();
-    buffer_ += text;
-  }
-  void end_row() {
-    buffer_ += '\n';
-    first_ = true;
-    if (buffer_.size() >= kFlushBytes) flush();
-  }
-  bool flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), out_) != buffer_.size()) ok_ = false;
-    buffer_.clear();
-    return ok_;
-  }
-  bool ok() const { return ok_; }
-
- private:
-  static constexpr size_t kFlushBytes = 1 << 20;
-  void sep() {
-    if (!first_) buffer_ += ',';
-    first_ = false;
-  }
-  std::FILE* out_;
-  std::string buffer_;
-  bool first_ = true;
-  bool ok_ = true;
-};
 
 void write_csv(CsvWriter& csv, uint32_t fields, const std::vector<vec3>& points, const std::vector<PointResult>& results) {
   for (const char* h : {"x", "y", "z"}) csv.field(h);

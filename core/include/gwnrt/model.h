@@ -41,9 +41,13 @@ struct BoundaryCurve {
 };
 BoundaryCurve extract_boundary(const Mesh& mesh);
 
-// The cone C over ∂M (see ModelView::cone): one triangle (z, a, b) per segment a→b, with a and
-// b the very same floats as the curve's (so crossings of M and C agree on shared edges).
-Mesh boundary_cone(const BoundaryCurve& curve);
+// Connected components of ∂M (loops, or any closed chains): the loop index of each segment.
+std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_count);
+
+// The cone C over ∂M (see ModelView::cone): one triangle (z_l, a, b) per segment a→b, z_l the
+// mean of its loop's endpoints; a and b are the very same floats as the curve's (so crossings
+// of M and C agree on shared edges).
+Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count);
 
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
 SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
@@ -70,6 +74,7 @@ class GwnModel {
   TriangleTreeView triangle_view() const { return triangles_.view(); }
   SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
   const TriangleTree& cone_tree() const { return cone_; }
+  std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
   const Aabb& bounds() const { return bounds_; }
   float surface_margin() const { return surface_margin_; }
   ModelView view() const;
@@ -81,6 +86,7 @@ class GwnModel {
   BoundaryCurve boundary_;
   SegmentTree boundary_tree_;
   TriangleTree cone_;
+  std::vector<SmoothRegion> smooth_regions_;
   Aabb bounds_;
   float surface_margin_ = 0;
   BuildTimings timings_;

@@ -6,6 +6,20 @@
 
 namespace gwnrt {
 
+// Where the smooth pieces of S can be. For a group of boundary loops whose cone triangles lie in
+// `box` with total area A_r, |w_C(y)| <= Σ_r A_r / (4π d_r²), d_r = distance from y to box r
+// (each triangle's solid angle is at most its area over distance squared). A level w* + k is
+// reached only where |w_C| >= δ = distance from 0 to the nearest level, so at least one group
+// has A_r / d_r² >= 4πδ·λ_r for shares λ_r summing to 1: d_r <= sqrt(spread_r / (4πδ)) with
+// spread_r = A_r / λ_r. Outside those grown boxes no level is crossed and the tracer needs no
+// Harnack step at all.
+struct SmoothRegion {
+  Aabb box;
+  float spread = 0;
+};
+
+inline constexpr uint32_t kMaxSmoothRegions = 16;  // loops are grouped beyond this
+
 struct ModelView {
   TriangleTreeView triangles;  // M
   SegmentTreeView boundary;    // ∂M
@@ -13,6 +27,8 @@ struct ModelView {
   // boundary vertices. M − C is closed, so w − w_C is an integer off M ∪ C and w mod 1 =
   // w_C mod 1 (DESIGN §3): the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
   TriangleTreeView cone;
+  const SmoothRegion* smooth_regions = nullptr;
+  uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M
   float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (DESIGN §5)
 };

@@ -50,6 +50,10 @@ struct RayHit {
   uint32_t crossings = 0;  // triangle crossings walked
 };
 
+// Below this distance between 0 and the nearest level (w* near a whole number) the smooth
+// regions' bound is useless and the march covers M's box grown by ModelView::surface_margin.
+inline constexpr float kMinLevelDistance = 1e-3f;
+
 namespace detail {
 
 // w_C at x (φ = its fractional part), optionally ∇w (= ∇w_C off M ∪ C).
@@ -92,30 +96,81 @@ class SurfaceTracer {
   }
 
   GWNRT_HD RayHit run() {
-    if (hit_.invalid || !(sheets_ || smooth_)) return hit_;
-    Aabb grown = m_.bounds;
-    grown.lo -= vec3(m_.surface_margin);
-    grown.hi += vec3(m_.surface_margin);
-    float g0, g1;
-    clip_to_box(frame_, grown, g0, g1);
-    if (!(g0 <= g1) || g1 < t_near_ || g0 > t_far_ || !(t_near_ <= t_far_)) return hit_;
-    const float t_start = fmaxf(t_near_, g0);
-    t_end_ = fminf(t_far_, g1);
+    if (hit_.invalid || !(sheets_ || smooth_) || !(t_near_ <= t_far_)) return hit_;
+    // Where the march is needed (see SmoothRegion), as sorted disjoint intervals.
+    struct Interval {
+      float a, b;
+    } march[kMaxSmoothRegions];
+    int march_count = 0;
+    if (smooth_) {
+      const float delta = fminf(phase_, 1.0f - phase_);
+      const uint32_t regions = delta > kMinLevelDistance ? m_.smooth_region_count : 1u;
+      for (uint32_t r = 0; r < regions && r < kMaxSmoothRegions; ++r) {
+        Aabb box;
+        float grow;
+        if (delta > kMinLevelDistance) {
+          box = m_.smooth_regions[r].box;
+          grow = sqrtf(m_.smooth_regions[r].spread / (4.0f * float(kPi) * delta));
+        } else {  // levels at whole numbers: only |w| <= A/(4π d²) of the whole mesh bounds them
+          box = m_.bounds;
+          grow = m_.surface_margin;
+        }
+        box.lo -= vec3(grow);
+        box.hi += vec3(grow);
+        float a, b;
+        clip_to_box(frame_, box, a, b);
+        a = fmaxf(a, t_near_);
+        b = fminf(b, t_far_);
+        if (!(a <= b)) continue;
+        int i = march_count++;  // insertion by start
+        for (; i > 0 && march[i - 1].a > a; --i) march[i] = march[i - 1];
+        march[i] = {a, b};
+      }
+      int merged = 0;
+      for (int i = 0; i < march_count; ++i) {
+        if (merged > 0 && march[i].a <= march[merged - 1].b) {
+          march[merged - 1].b = fmaxf(march[merged - 1].b, march[i].b);
+        } else {
+          march[merged++] = march[i];
+        }
+      }
+      march_count = merged;
+    }
+    // Crossings live in M's box.
+    float box0 = kInfinity, box1 = -kInfinity;
+    if (sheets_) clip_to_box(frame_, m_.bounds, box0, box1);
+    float t_start = sheets_ && box0 <= box1 ? box0 : kInfinity;
+    t_end_ = sheets_ && box0 <= box1 ? box1 : -kInfinity;
+    if (march_count > 0) {
+      t_start = fminf(t_start, march[0].a);
+      t_end_ = fmaxf(t_end_, march[march_count - 1].b);
+    }
+    t_start = fmaxf(t_start, t_near_);
+    t_end_ = fminf(t_end_, t_far_);
+    if (!(t_start <= t_end_)) return hit_;
+
+    // march[0] starts at or after t_start; the start lies in a region exactly when they meet.
+    const bool start_in_region = march_count > 0 && march[0].a <= t_start;
     float w_start = 0.0f;
-    if (smooth_) w_start = cone_winding_number(m_.cone, point(t_start), o_, nullptr);
+    if (start_in_region) w_start = cone_winding_number(m_.cone, point(t_start), o_, nullptr);
     if (sheets_) {
       // The integer part of w at the start: crossings of the closed M − C since the line entered
-      // the grown box, where w = w_C.
-      const int crossed = crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, g0, t_start) -
-                          crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, g0, t_start);
-      band_ = int(floorf(w_start + float(crossed) - o_.level));
+      // M's box (which holds C), where w = w_C.
+      const int crossed = box0 < t_start ? crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, box0, t_start) -
+                                               crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, box0, t_start)
+                                         : 0;
+      // Outside every region |w_C| < δ, so floor(w_C - w*) = -1 - floor(w*) without evaluating it.
+      band_ = start_in_region ? int(floorf(w_start + float(crossed) - o_.level))
+                              : crossed - 1 - int(floorf(o_.level));
       have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, t_start, kEmptyLane, t_end_, next_);
     }
-    if (!smooth_) {
-      walk_crossings_until(t_end_);
-      return hit_;
+    for (int k = 0; k < march_count; ++k) {
+      const float a = fmaxf(march[k].a, t_start), b = fminf(march[k].b, t_end_);
+      if (!(a <= b)) continue;
+      if (sheets_ && walk_crossings_until(a)) return hit_;
+      if (this->march(a, b, k == 0 && start_in_region, w_start)) return hit_;
     }
-    march(t_start, w_start);
+    if (sheets_) walk_crossings_until(t_end_);
     return hit_;
   }
 
@@ -158,16 +213,16 @@ class SurfaceTracer {
     return false;
   }
 
-  GWNRT_HD void march(float t, float w_at_t) {
+  // Harnack steps on φ over [t, t_end]; true when the trace ended (a hit, or a cap).
+  GWNRT_HD bool march(float t, float t_end, bool have_w, float w_at_t) {
     float t_prev = t, rho_prev = 0.0f;
     bool overstepped = false;
-    bool have_w = true;  // w_at_t is the value at t (the start reuses the band's evaluation)
     int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
     float pending_level = 0.0f, pending_phi = 0.0f;
     for (;;) {
       if (hit_.steps >= o_.max_steps) {
         hit_.capped = true;
-        return;
+        return true;
       }
       ++hit_.steps;
       const vec3 x = point(t);
@@ -184,7 +239,7 @@ class SurfaceTracer {
       }
       overstepped = false;
       // No level lies in (t_prev, t): the crossings there come first.
-      if (sheets_ && walk_crossings_until(t)) return;
+      if (sheets_ && walk_crossings_until(t)) return true;
       if (pending != 0) {
         float d = phi - pending_phi;
         d -= floorf(d + 0.5f);  // the change since the level, unwrapped (it is small)
@@ -205,7 +260,7 @@ class SurfaceTracer {
             const int step = at_above ? 1 : -1;
             if (!sheets_ || (band_ < 0) != (band_ + step < 0)) {
               report(t, HitKind::kSmooth, -g / gn, kEmptyLane);
-              return;
+              return true;
             }
             // A level of w other than w*: step across it and check on the far side.
             pending = step;
@@ -217,23 +272,22 @@ class SurfaceTracer {
           }
           t_prev = t;
           rho_prev = 0.0f;
-          if (t > t_end_) break;
+          if (t > t_end) return false;
           continue;
         }
       }
-      if (t >= t_end_) break;
+      if (t >= t_end) return false;
       const float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
-      if (t + safe >= t_end_) break;
+      if (t + safe >= t_end) return false;
       t_prev = t;
       rho_prev = safe;
       if (o_.overstep) {
-        t = fminf(t + kOverstepFactor * safe, t_end_);
+        t = fminf(t + kOverstepFactor * safe, t_end);
         overstepped = true;
       } else {
         t += safe;
       }
     }
-    if (sheets_) walk_crossings_until(t_end_);
   }
 
   const ModelView& m_;

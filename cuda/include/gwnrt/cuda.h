@@ -31,6 +31,10 @@ class DeviceModel {
   std::unique_ptr<Buffers> buffers_;
 };
 
+// GPU counterpart of gwnrt::trace_rays (the same trace_surface per ray); hits in input order.
+Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
+                  std::span<RayHit> hits);
+
 // GPU counterpart of gwnrt::evaluate_points; results in input order.
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results);
