@@ -216,7 +216,7 @@ class SurfaceTracer {
   // Harnack steps on φ over [t, t_end]; true when the trace ended (a hit, or a cap).
   GWNRT_HD bool march(float t, float t_end, bool have_w, float w_at_t) {
     float t_prev = t, rho_prev = 0.0f;
-    bool overstepped = false;
+    bool overstepped = false, gradient_wanted = false;
     int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
     float pending_level = 0.0f, pending_phi = 0.0f;
     for (;;) {
@@ -226,7 +226,11 @@ class SurfaceTracer {
       }
       ++hit_.steps;
       const vec3 x = point(t);
-      const float w = have_w ? w_at_t : cone_winding_number(m_.cone, x, o_, nullptr);
+      // Near ∂M the stopping test needs ∇w at almost every step; then w and ∇w come from one
+      // traversal instead of two.
+      vec3 g(0.0f);
+      const bool have_g = !have_w && gradient_wanted;
+      const float w = have_w ? w_at_t : cone_winding_number(m_.cone, x, o_, have_g ? &g : nullptr);
       have_w = false;
       const float phi = w - floorf(w);
       const float radius = boundary_distance(m_.boundary, x).distance;
@@ -249,9 +253,9 @@ class SurfaceTracer {
       }
       const float gap_below = phi - levels.below, gap_above = levels.above - phi;
       const float gap = fminf(gap_below, gap_above);
-      if (gap <= eps_ * harnack_gradient_bound(radius, phi)) {
-        vec3 g;
-        cone_winding_number(m_.cone, x, o_, &g);
+      gradient_wanted = gap <= eps_ * harnack_gradient_bound(radius, phi);
+      if (gradient_wanted) {
+        if (!have_g) cone_winding_number(m_.cone, x, o_, &g);
         const float gn = glm::length(g);
         if (gap <= eps_ * gn) {
           const bool at_above = gap_above <= gap_below;
