@@ -1,1 +1,291 @@
-int main() { return 1; }  // placeholder
+// gwnrt-render: render the surface S = ∂{w > level} of a triangle mesh (or a level set of its
+// solid angle) with a pinhole camera that frames the mesh, one Harnack-traced ray per pixel,
+// shaded by normal or by a headlight, to PNG or EXR. Prints rays/s and the mean cost per ray.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include "camera.h"
+#include "gwnrt/batch.h"
+#include "gwnrt/mesh.h"
+#include "gwnrt/model.h"
+#include "image_output.h"
+#include "primary_render.h"
+#include "progress_bar.h"
+#include "shading.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using gwnrt::render::ImageFormat;
+
+constexpr const char* kProgram = "gwnrt-render";
+// Far above any screen, far below where width·height·channels floats would overflow memory sizes.
+constexpr int kMaxImageSide = 32768;
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
+  return 1;
+}
+
+void warn(const std::string& message) { std::fprintf(stderr, "%s: warning: %s\n", kProgram, message.c_str()); }
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// 1234567 -> "1.23M": rates and counts in the summary.
+std::string human(double n) {
+  char buf[32];
+  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.2fG", n / 1e9);
+  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.2fM", n / 1e6);
+  else if (n >= 1e4) std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
+  else std::snprintf(buf, sizeof buf, "%.0f", n);
+  return buf;
+}
+
+// CLI11 reads "nan" and "inf" as numbers; none of the options here means anything with them.
+std::optional<std::string> check_finite(const char* option, double value) {
+  if (std::isfinite(value)) return std::nullopt;
+  return std::string(option) + " must be a finite number";
+}
+
+// An output path's format, or why it cannot be written: checked before the mesh is loaded so a
+// long render is never thrown away at the end.
+std::optional<std::string> check_output_path(const char* option, const std::string& path, bool create_parent) {
+  if (!gwnrt::render::image_format_for(path)) {
+    return std::string(option) + " " + path + ": unknown image extension (supported: " +
+           gwnrt::render::supported_image_extensions() + ")";
+  }
+  const fs::path parent = fs::path(path).parent_path();
+  if (parent.empty()) return std::nullopt;
+  std::error_code ec;
+  if (create_parent) {
+    fs::create_directories(parent, ec);
+    if (ec) return std::string(option) + " " + path + ": cannot create directory " + parent.string() + ": " + ec.message();
+  } else if (!fs::is_directory(parent, ec)) {
+    return std::string(option) + " " + path + ": directory " + parent.string() + " does not exist";
+  }
+  return std::nullopt;
+}
+
+// "1 ray", "2 rays".
+std::string count_of(uint64_t n, const char* noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
+std::string command_line(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) line += (i ? " " : "") + std::string(argv[i]);
+  return line;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Render the generalized-winding-number surface S = boundary of {w > level} of a triangle mesh "
+               "(OBJ/PLY) with Harnack tracing: a pinhole camera framing the mesh, one ray per pixel, "
+               "to PNG (sRGB) or EXR (linear).",
+               kProgram};
+
+  std::string mesh_path;
+  std::string output_path;
+  int width = 800, height = 600;
+  std::string shading_name = "headlight";
+  double azimuth = 30.0, elevation = 20.0, fov = 40.0;
+  std::string mode_name = "gwn";
+  std::optional<double> level;
+  const gwnrt::TraceOptions defaults;
+  double epsilon = defaults.epsilon;
+  int64_t max_steps = defaults.max_steps;
+  double beta = defaults.beta;
+  int threads = 0;
+  std::string stats_path;
+
+  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
+  app.add_option("-o,--output", output_path, "Image to write, .png or .exr (default: out/<mesh stem>.png)")
+      ->type_name("FILE");
+  app.add_option("--width", width, "Image width in pixels")->type_name("W")->capture_default_str();
+  app.add_option("--height", height, "Image height in pixels")->type_name("H")->capture_default_str();
+  app.add_option("--shading", shading_name,
+                 "normal: outward normal as colour; headlight: diffuse light from the eye, smooth pieces "
+                 "(filled holes) bluish")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"normal", "headlight"}));
+  app.add_option("--azimuth", azimuth, "Camera direction about +y, degrees (0 looks along -z)")
+      ->type_name("DEG")
+      ->capture_default_str();
+  app.add_option("--elevation", elevation, "Camera height above the horizon, degrees in [-90, 90]")
+      ->type_name("DEG")
+      ->capture_default_str();
+  app.add_option("--fov", fov, "Vertical field of view, degrees in (0, 180)")
+      ->type_name("DEG")
+      ->capture_default_str();
+  app.add_option("--mode", mode_name,
+                 "gwn: S = boundary of {w > level}, sheets and smooth pieces; solid-angle: the level set "
+                 "{Omega = level mod 4 pi}, smooth pieces only")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gwn", "solid-angle"}));
+  app.add_option("--level", level,
+                 "gwn mode: the value of w (default 0.5); solid-angle mode: an angle in radians (default 2 pi)")
+      ->type_name("L");
+  app.add_option("--eps", epsilon, "Harnack stopping distance, relative to the mesh's box diagonal")
+      ->type_name("E")
+      ->capture_default_str();
+  app.add_option("--max-steps", max_steps, "Harnack steps per ray before it is given up (counted as capped)")
+      ->type_name("N")
+      ->capture_default_str();
+  app.add_option("--beta", beta, "Accuracy of the multipole evaluation: expand a cluster beyond beta * radius")
+      ->type_name("B")
+      ->capture_default_str();
+  app.add_option("--threads", threads, "CPU threads (default: all)")->type_name("N");
+  app.add_option("--stats-image", stats_path,
+                 "Also write a false-colour image of Harnack steps per pixel (.png, or .exr with the raw counts)")
+      ->type_name("FILE");
+
+  // Usage errors read like every other error of this program, and exit with 1 as they do.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string(kProgram) + ": " + e.what() + "\nRun with --help for more information.\n";
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 1;  // --help is a ParseError too, and succeeds
+  }
+
+  // Everything the user typed is checked before the mesh is loaded and built.
+  if (width < 1 || width > kMaxImageSide || height < 1 || height > kMaxImageSide) {
+    return fail("--width and --height must lie in [1, " + std::to_string(kMaxImageSide) + "], got " +
+                std::to_string(width) + "x" + std::to_string(height));
+  }
+  for (const auto& [name, value] : {std::pair{"--azimuth", azimuth}, std::pair{"--elevation", elevation},
+                                    std::pair{"--fov", fov}, std::pair{"--eps", epsilon}, std::pair{"--beta", beta}}) {
+    if (auto why = check_finite(name, value)) return fail(*why);
+  }
+  if (level) {
+    if (auto why = check_finite("--level", *level)) return fail(*why);
+  }
+  if (elevation < -90.0 || elevation > 90.0) return fail("--elevation must lie in [-90, 90] degrees");
+  if (!(fov > 0.0 && fov < 180.0)) return fail("--fov must lie in (0, 180) degrees");
+  if (max_steps < 1 || max_steps > int64_t(UINT32_MAX)) {
+    return fail("--max-steps must lie in [1, " + std::to_string(UINT32_MAX) + "], got " + std::to_string(max_steps));
+  }
+  if (app.count("--threads") && threads < 1) return fail("--threads must be at least 1");
+
+  const bool solid_angle = mode_name == "solid-angle";
+  gwnrt::TraceOptions trace = defaults;
+  trace.mode = solid_angle ? gwnrt::TraceMode::kSolidAngle : gwnrt::TraceMode::kWindingNumber;
+  // The tracer works in units of w in both modes: an angle Ω* is the level Ω*/(4π).
+  trace.level = solid_angle ? float(level.value_or(2.0 * gwnrt::kPi) / (4.0 * gwnrt::kPi)) : float(level.value_or(0.5));
+  trace.epsilon = float(epsilon);
+  trace.max_steps = uint32_t(max_steps);
+  trace.beta = float(beta);
+  if (gwnrt::Status s = gwnrt::validate_trace_options(trace); !s.ok()) return fail(s.message());
+
+  const bool default_output = output_path.empty();
+  if (default_output) output_path = (fs::path("out") / fs::path(mesh_path).stem()).string() + ".png";
+  if (auto why = check_output_path("-o", output_path, default_output)) return fail(*why);
+  if (!stats_path.empty()) {
+    if (auto why = check_output_path("--stats-image", stats_path, false)) return fail(*why);
+    std::error_code stats_ec, output_ec;
+    const fs::path stats_file = fs::weakly_canonical(stats_path, stats_ec);
+    const fs::path output_file = fs::weakly_canonical(output_path, output_ec);
+    if (!stats_ec && !output_ec && stats_file == output_file) {
+      return fail("--stats-image and the output are the same file: " + stats_path);
+    }
+  }
+
+  std::optional<tbb::global_control> thread_limit;
+  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  const size_t thread_count = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+
+  const auto t_load = std::chrono::steady_clock::now();
+  gwnrt::Mesh mesh;
+  gwnrt::MeshLoadReport report;
+  if (gwnrt::Status s = gwnrt::load_mesh(mesh_path, mesh, &report); !s.ok()) return fail(s.message());
+  const double load_seconds = seconds_since(t_load);
+
+  const auto t_build = std::chrono::steady_clock::now();
+  gwnrt::GwnModel model;
+  if (gwnrt::Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok()) return fail(s.message());
+  const double build_seconds = seconds_since(t_build);
+  const size_t boundary_segments = model.boundary().segment_count();
+  std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,
+              mesh_path.c_str(), report.triangle_count, boundary_segments, boundary_segments ? "" : " (closed)",
+              load_seconds, build_seconds);
+  std::fflush(stdout);
+  if (solid_angle && boundary_segments == 0) {
+    // Off a closed mesh Ω is a whole multiple of 4π: there is no level set to see.
+    warn("the mesh is closed: in solid-angle mode there is nothing to render");
+  }
+
+  const gwnrt::examples::PinholeCamera camera =
+      gwnrt::examples::frame_box(model.bounds(), width, height, float(azimuth), float(elevation), float(fov));
+  gwnrt::render::PrimaryRenderSettings settings;
+  settings.shading = shading_name == "normal" ? gwnrt::render::ShadingMode::kNormal
+                                              : gwnrt::render::ShadingMode::kHeadlight;
+  settings.trace = trace;
+
+  std::atomic<size_t> progress{0};
+  gwnrt::render::PrimaryRender render;
+  {
+    gwnrt::examples::ProgressBar bar(progress, size_t(width) * size_t(height), "px");
+    render = gwnrt::render::render_primary(gwnrt::model_view(model), camera, settings, &progress);
+  }
+
+  const gwnrt::render::RenderStats& stats = render.stats;
+  const double rays_per_second = render.seconds > 0 ? double(stats.rays) / render.seconds : 0.0;
+  std::printf("%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
+              "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
+              kProgram, width, height, render.seconds, count_of(thread_count, "thread").c_str(), human(rays_per_second).c_str(),
+              stats.mean_steps(), stats.max_steps, stats.mean_crossings(),
+              (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
+              (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
+              (unsigned long long)(stats.step_capped + stats.crossing_capped));
+  std::fflush(stdout);
+  if (stats.step_capped) {
+    warn(count_of(stats.step_capped, "ray") + " hit the step cap (--max-steps " + std::to_string(trace.max_steps) +
+         "), shown as background");
+  }
+  if (stats.crossing_capped) {
+    warn(count_of(stats.crossing_capped, "ray") + " hit the crossing cap (" +
+         std::to_string(trace.max_crossings) + " crossings), shown as background");
+  }
+  if (stats.invalid) warn(count_of(stats.invalid, "ray") + " rejected by the tracer as invalid");
+  // With the eye outside {w > level} (far from the mesh w is near 0), every first hit enters the
+  // region, so its outward normal faces the eye. Solid-angle levels are crossed both ways.
+  if (!solid_angle && trace.level > 0.0f && stats.facing_away) {
+    warn(count_of(stats.facing_away, "hit") + " with an outward normal facing away from the camera");
+  }
+
+  const std::string description = command_line(argc, argv);
+  if (gwnrt::Status s = gwnrt::render::write_image(output_path, render.colour, description); !s.ok()) {
+    return fail(s.message());
+  }
+  std::printf("%s: wrote %s\n", kProgram, output_path.c_str());
+  if (!stats_path.empty()) {
+    const gwnrt::render::Image steps = gwnrt::render::steps_image(render);
+    if (gwnrt::Status s = gwnrt::render::write_image(stats_path, steps, description); !s.ok()) return fail(s.message());
+    if (stats.max_steps == 0) {
+      std::printf("%s: wrote %s (no ray took a Harnack step: grey is a hit, black a miss)\n", kProgram,
+                  stats_path.c_str());
+    } else {
+      std::printf("%s: wrote %s (Harnack steps per pixel, log scale from dark blue = 1 to red = %u; grey: a hit "
+                  "without steps; black: a miss without steps; magenta: capped)\n",
+                  kProgram, stats_path.c_str(), std::max(stats.max_steps, 2u));
+    }
+  }
+  return 0;
+}
