@@ -54,6 +54,11 @@ struct RayHit {
 // regions' bound is useless and the march covers M's box grown by ModelView::surface_margin.
 inline constexpr float kMinLevelDistance = 1e-3f;
 
+// Padding of M's box for the crossing walk, relative to its diagonal (plus an absolute floor for
+// flat meshes): far above float round-off of the crossing and clip computations.
+inline constexpr float kBoxPad = 1e-4f;
+inline constexpr float kBoxPadAbsolute = 1e-30f;
+
 namespace detail {
 
 // w_C at x (φ = its fractional part), optionally ∇w (= ∇w_C off M ∪ C).
@@ -65,7 +70,7 @@ GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const ve
     return float(s.w);
   }
   if (gradient) {
-    const WindingSample s = winding_number_taylor<2, true, false>(cone, x, o.beta);
+    const WindingSample s = winding_number_taylor<2, true, false, true>(cone, x, o.beta);
     *gradient = s.gradient;
     return s.w;
   }
@@ -77,7 +82,7 @@ GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite
 class SurfaceTracer {
  public:
   GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o) : m_(m), o_(o) {
-    const float len = glm::length(ray.direction);
+    const float len = float(glm::length(dvec3(ray.direction)));  // in float, |d|² under/overflows for finite d
     if (!finite3(ray.origin) || !finite3(ray.direction) || !(len > 0.0f) || !is_finite(len) || is_nan(ray.tnear) ||
         is_nan(ray.tfar)) {
       hit_.invalid = true;
@@ -136,9 +141,16 @@ class SurfaceTracer {
       }
       march_count = merged;
     }
-    // Crossings live in M's box.
+    // Crossings live in M's box; it is padded because the crossing of a triangle lying in a face
+    // of the box is rounded differently from the box clip and may fall just outside it.
     float box0 = kInfinity, box1 = -kInfinity;
-    if (sheets_) clip_to_box(frame_, m_.bounds, box0, box1);
+    if (sheets_) {
+      Aabb padded = m_.bounds;
+      const vec3 pad(kBoxPad * glm::length(m_.bounds.hi - m_.bounds.lo) + kBoxPadAbsolute);
+      padded.lo -= pad;
+      padded.hi += pad;
+      clip_to_box(frame_, padded, box0, box1);
+    }
     float t_start = sheets_ && box0 <= box1 ? box0 : kInfinity;
     t_end_ = sheets_ && box0 <= box1 ? box1 : -kInfinity;
     if (march_count > 0) {

@@ -50,9 +50,13 @@ inline constexpr float kLeafExpansionScale = 1.5f;
 // w (and optionally ∇w, H_w) at x by the multipole tree. A cluster whose ball (centre p̄,
 // radius r) has |x - p̄| > beta·r (leaves: kLeafExpansionScale·beta·r) is replaced by its
 // expansion of the given order; nearer leaves are summed exactly, nearer inner clusters opened.
-template <int Order, bool WantGradient, bool WantHessian>
+// PreciseNearGradient sums the exact near-field gradient terms in double: the tracer's cone has
+// triangles meeting along long inner edges whose large Biot–Savart terms cancel, and in float
+// that cancellation leaves errors of 1e-2 in the normal just above a flat cone.
+template <int Order, bool WantGradient, bool WantHessian, bool PreciseNearGradient = false>
 GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const vec3& x, float beta) {
   FieldAccumulator<float> acc;
+  dvec3 near_gradient(0.0);
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = 0;
@@ -90,6 +94,8 @@ GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const
           triangle_solid_angle_derivatives(p0, p1, p2, x, g, h);
           if constexpr (WantGradient) acc.gradient += g;
           acc.hessian += h;
+        } else if constexpr (WantGradient && PreciseNearGradient) {
+          near_gradient += triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x));
         } else if constexpr (WantGradient) {
           acc.gradient += triangle_solid_angle_gradient(p0, p1, p2, x);
         }
@@ -98,7 +104,7 @@ GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const
   }
   WindingSample out;
   out.w = acc.omega * kInv4Pi;
-  out.gradient = acc.gradient * kInv4Pi;
+  out.gradient = (acc.gradient + vec3(near_gradient)) * kInv4Pi;
   out.hessian = acc.hessian * kInv4Pi;
   return out;
 }
