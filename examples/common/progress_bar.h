@@ -18,6 +18,16 @@
 
 namespace gwnrt::examples {
 
+// 1234567 -> "1.2M": counts and rates in progress bars and summaries.
+inline std::string human_count(double n) {
+  char buf[32];
+  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.1fG", n / 1e9);
+  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.1fM", n / 1e6);
+  else if (n >= 1e4) std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
+  else std::snprintf(buf, sizeof buf, "%.0f", n);
+  return buf;
+}
+
 class ProgressBar {
  public:
   // `counter` must outlive the bar. `unit` labels the counts ("pts").
@@ -60,14 +70,6 @@ class ProgressBar {
     while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_; })) draw();
   }
 
-  static std::string human(double n) {
-    char buf[32];
-    if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.1fG", n / 1e9);
-    else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.1fM", n / 1e6);
-    else if (n >= 1e4) std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
-    else std::snprintf(buf, sizeof buf, "%.0f", n);
-    return buf;
-  }
 
   static std::string duration(double seconds) {
     char buf[32];
@@ -88,7 +90,7 @@ class ProgressBar {
     char pct[16];
     std::snprintf(pct, sizeof pct, "] %3d%%  ", int(fraction * 100.0));
     line += pct;
-    line += human(double(done)) + "/" + human(double(total_)) + " " + unit_;
+    line += human_count(double(done)) + "/" + human_count(double(total_)) + " " + unit_;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     // Too few points done (or too little time passed) gives a wildly wrong rate; show nothing yet.
     if (done > 0 && done < total_ && elapsed > 0.3) {

@@ -46,15 +46,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// 1234567 -> "1.23M": rates and counts in the summary.
-std::string human(double n) {
-  char buf[32];
-  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.2fG", n / 1e9);
-  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.2fM", n / 1e6);
-  else if (n >= 1e4) std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
-  else std::snprintf(buf, sizeof buf, "%.0f", n);
-  return buf;
-}
 
 // CLI11 reads "nan" and "inf" as numbers; none of the options here means anything with them.
 std::optional<std::string> check_finite(const char* option, double value) {
@@ -249,7 +240,7 @@ int main(int argc, char** argv) {
   const double rays_per_second = render.seconds > 0 ? double(stats.rays) / render.seconds : 0.0;
   std::printf("%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
               "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
-              kProgram, width, height, render.seconds, count_of(thread_count, "thread").c_str(), human(rays_per_second).c_str(),
+              kProgram, width, height, render.seconds, count_of(thread_count, "thread").c_str(), gwnrt::examples::human_count(rays_per_second).c_str(),
               stats.mean_steps(), stats.max_steps, stats.mean_crossings(),
               (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
               (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
