@@ -45,6 +45,24 @@ struct alignas(16) WideNodeOrder2 {
   float e[3][kBvhWidth];
 };
 
+// Near-first traversal: a stack entry (a node and how near it is: entry distance along a ray, or
+// squared distance to a point), and the push that sorts a node's inner children so that the
+// nearest is popped next.
+struct NearFirstEntry {
+  uint32_t node;
+  float key;
+};
+
+GWNRT_HD inline void push_near_first(NearFirstEntry* stack, int& sp, NearFirstEntry* children, int count) {
+  for (int i = 1; i < count; ++i)  // descending keys: the farthest goes deepest
+    for (int j = i; j > 0 && children[j].key > children[j - 1].key; --j) {
+      const NearFirstEntry s = children[j];
+      children[j] = children[j - 1];
+      children[j - 1] = s;
+    }
+  for (int i = 0; i < count; ++i) stack[sp++] = children[i];
+}
+
 struct BvhView {
   const WideNode* nodes = nullptr;
   uint32_t node_count = 0;

@@ -100,18 +100,14 @@ GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* 
   NearestPrimitive best;
   if (bvh.node_count == 0) return best;
   float best2 = kInfinity;
-  struct Entry {
-    uint32_t node;
-    float d2;
-  };
-  Entry stack[kTraversalStackSize];
+  NearFirstEntry stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = {0, 0.0f};
   while (sp > 0) {
-    const Entry entry = stack[--sp];
-    if (entry.d2 >= best2) continue;
+    const NearFirstEntry entry = stack[--sp];
+    if (entry.key >= best2) continue;
     const WideNode& node = bvh.nodes[entry.node];
-    Entry inner[kBvhWidth];
+    NearFirstEntry inner[kBvhWidth];
     int inner_count = 0;
     for (int l = 0; l < kBvhWidth; ++l) {
       const float d2 = box_distance2(node, l, x);
@@ -133,14 +129,7 @@ GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* 
         }
       }
     }
-    // Push farthest first so that the nearest child is visited next.
-    for (int i = 1; i < inner_count; ++i)
-      for (int j = i; j > 0 && inner[j].d2 > inner[j - 1].d2; --j) {
-        const Entry t = inner[j];
-        inner[j] = inner[j - 1];
-        inner[j - 1] = t;
-      }
-    for (int i = 0; i < inner_count; ++i) stack[sp++] = inner[i];
+    push_near_first(stack, sp, inner, inner_count);
   }
   best.distance = best2 < kInfinity ? sqrtf(best2) : kInfinity;
   return best;

@@ -132,18 +132,14 @@ GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, con
   if (bvh.node_count == 0) return false;
   float best_t = t_max;
   bool found = false;
-  struct Entry {
-    uint32_t node;
-    float t;
-  };
-  Entry stack[kTraversalStackSize];
+  NearFirstEntry stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = {0, t_after};
   while (sp > 0) {
-    const Entry e = stack[--sp];
-    if (e.t > best_t) continue;
+    const NearFirstEntry e = stack[--sp];
+    if (e.key > best_t) continue;
     const WideNode& node = bvh.nodes[e.node];
-    Entry inner[kBvhWidth];
+    NearFirstEntry inner[kBvhWidth];
     int inner_count = 0;
     for (int l = 0; l < kBvhWidth; ++l) {
       if (node.child[l] == kEmptyLane) continue;
@@ -166,13 +162,7 @@ GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, con
         }
       }
     }
-    for (int i = 1; i < inner_count; ++i)  // farthest pushed first: nearest visited next
-      for (int j = i; j > 0 && inner[j].t > inner[j - 1].t; --j) {
-        const Entry s = inner[j];
-        inner[j] = inner[j - 1];
-        inner[j - 1] = s;
-      }
-    for (int i = 0; i < inner_count; ++i) stack[sp++] = inner[i];
+    push_near_first(stack, sp, inner, inner_count);
   }
   return found;
 }
