@@ -43,15 +43,16 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
+#include "load_model.h"
 
 namespace {
 
 using namespace gwnrt;
 using clock_type = std::chrono::steady_clock;
+using examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-bench-trace";
 
-double seconds_since(clock_type::time_point t0) { return std::chrono::duration<double>(clock_type::now() - t0).count(); }
 
 [[noreturn]] void die(const std::string& message) {
   std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
@@ -333,15 +334,11 @@ int main(int argc, char** argv) {
   std::vector<MeshSummary> summaries;
   for (const std::string& path : meshes) {
     // --- load and build
-    Mesh mesh;
-    MeshLoadReport report;
-    const auto tl = clock_type::now();
-    if (Status s = load_mesh(path, mesh, &report); !s.ok()) die(s.message());
-    const double load_sec = seconds_since(tl);
     GwnModel model;
-    const auto tb = clock_type::now();
-    if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) die(s.message());
-    const double build_sec = seconds_since(tb);
+    examples::ModelLoad loaded;
+    if (Status s = examples::load_model(path, model, loaded); !s.ok()) die(s.message());
+    const MeshLoadReport& report = loaded.report;
+    const double load_sec = loaded.load_seconds, build_sec = loaded.build_seconds;
     const ModelView view = model_view(model);
     const float diag = glm::length(model.bounds().hi - model.bounds().lo);
     MeshSummary sum;

@@ -20,6 +20,7 @@
 #include "gwnrt/model.h"
 #include "gwnrt/point_query.h"
 #include "csv_writer.h"
+#include "load_model.h"
 #include "point_io.h"
 #include "progress_bar.h"
 
@@ -31,6 +32,7 @@ namespace {
 
 using gwnrt::PointResult;
 using gwnrt::examples::CsvWriter;
+using gwnrt::examples::seconds_since;
 using gwnrt::vec3;
 
 constexpr const char* kProgram = "gwnrt-query";
@@ -100,10 +102,6 @@ void write_csv(CsvWriter& csv, uint32_t fields, const std::vector<vec3>& points,
     if (fields & gwnrt::kFieldBoundaryDistance) csv.field(r.boundary_distance);
     csv.end_row();
   }
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -187,16 +185,11 @@ int main(int argc, char** argv) {
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
 
-  const auto t_load = std::chrono::steady_clock::now();
-  gwnrt::Mesh mesh;
-  gwnrt::MeshLoadReport report;
-  if (gwnrt::Status s = gwnrt::load_mesh(mesh_path, mesh, &report); !s.ok()) return fail(s.message());
-  const double load_seconds = seconds_since(t_load);
-
-  const auto t_build = std::chrono::steady_clock::now();
   gwnrt::GwnModel model;
-  if (gwnrt::Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok()) return fail(s.message());
-  const double build_seconds = seconds_since(t_build);
+  gwnrt::examples::ModelLoad loaded;
+  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
+  const gwnrt::MeshLoadReport& report = loaded.report;
+  const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
 
   if (chatty) {
     std::fprintf(stderr, "%s: %s (%s): %zu vertices, %zu triangles", kProgram, mesh_path.c_str(), report.format.c_str(),

@@ -3,7 +3,6 @@
 // shaded by normal or by a headlight, to PNG or EXR. Prints rays/s and the mean cost per ray.
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -22,6 +21,7 @@
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
 #include "image_output.h"
+#include "load_model.h"
 #include "primary_render.h"
 #include "progress_bar.h"
 #include "shading.h"
@@ -41,10 +41,6 @@ int fail(const std::string& message) {
 }
 
 void warn(const std::string& message) { std::fprintf(stderr, "%s: warning: %s\n", kProgram, message.c_str()); }
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 
 // CLI11 reads "nan" and "inf" as numbers; none of the options here means anything with them.
@@ -202,19 +198,13 @@ int main(int argc, char** argv) {
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
   const size_t thread_count = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
 
-  const auto t_load = std::chrono::steady_clock::now();
-  gwnrt::Mesh mesh;
-  gwnrt::MeshLoadReport report;
-  if (gwnrt::Status s = gwnrt::load_mesh(mesh_path, mesh, &report); !s.ok()) return fail(s.message());
-  const double load_seconds = seconds_since(t_load);
-
-  const auto t_build = std::chrono::steady_clock::now();
   gwnrt::GwnModel model;
-  if (gwnrt::Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok()) return fail(s.message());
-  const double build_seconds = seconds_since(t_build);
+  gwnrt::examples::ModelLoad loaded;
+  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
+  const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
   const size_t boundary_segments = model.boundary().segment_count();
   std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,
-              mesh_path.c_str(), report.triangle_count, boundary_segments, boundary_segments ? "" : " (closed)",
+              mesh_path.c_str(), loaded.report.triangle_count, boundary_segments, boundary_segments ? "" : " (closed)",
               load_seconds, build_seconds);
   std::fflush(stdout);
   if (solid_angle && boundary_segments == 0) {

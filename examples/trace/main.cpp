@@ -16,6 +16,7 @@
 #include <tbb/global_control.h>
 
 #include "csv_writer.h"
+#include "load_model.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
@@ -34,6 +35,7 @@ using gwnrt::Status;
 using gwnrt::StatusCode;
 using gwnrt::vec3;
 using gwnrt::examples::CsvWriter;
+using gwnrt::examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-trace";
 
@@ -97,10 +99,6 @@ void write_csv(CsvWriter& csv, const std::vector<RayHit>& hits) {
   }
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -162,15 +160,13 @@ int main(int argc, char** argv) {
   std::vector<Ray> rays;
   if (Status s = read_rays(rays_path, rays); !s.ok()) return fail(s.message());
 
-  const auto t_build = std::chrono::steady_clock::now();
-  gwnrt::Mesh mesh;
-  if (Status s = gwnrt::load_mesh(mesh_path, mesh); !s.ok()) return fail(s.message());
   gwnrt::GwnModel model;
-  if (Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok()) return fail(mesh_path + ": " + s.message());
+  gwnrt::examples::ModelLoad loaded;
+  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),
-                 model.boundary().segment_count() ? "" : " (closed: no Harnack steps)", seconds_since(t_build));
+                 model.boundary().segment_count() ? "" : " (closed: no Harnack steps)", loaded.load_seconds + loaded.build_seconds);
 
   std::vector<RayHit> hits(rays.size());
   const auto t_trace = std::chrono::steady_clock::now();
