@@ -7,6 +7,18 @@
 #include <tbb/parallel_for.h>
 
 namespace gwnrt {
+namespace {
+
+// out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
+template <class In, class Out, class Fn>
+void parallel_map(std::span<const In> in, std::span<Out> out, size_t grain, std::atomic<size_t>* progress, Fn fn) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), grain), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fn(in[i]);
+    if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
+  });
+}
+
+}  // namespace
 
 Status validate_request(const QueryRequest& request) {
   if (request.taylor.order < 0 || request.taylor.order > 2)
@@ -23,10 +35,7 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
                                               std::to_string(results.size()) + " result slots"};
   if (Status s = validate_request(request); !s.ok()) return s;
   const ModelView view = model_view(model);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) results[i] = evaluate_point(view, points[i], request);
-    if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
-  });
+  parallel_map(points, results, 256, progress, [&](const vec3& x) { return evaluate_point(view, x, request); });
   return Status::Ok();
 }
 
@@ -50,10 +59,8 @@ Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceO
                                               std::to_string(hits.size()) + " hit slots"};
   if (Status s = validate_trace_options(options); !s.ok()) return s;
   const ModelView view = model_view(model);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) hits[i] = trace_surface(view, rays[i], options);
-    if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
-  });
+  // Rays cost far more than points (and vary more), so chunks are smaller.
+  parallel_map(rays, hits, 64, progress, [&](const Ray& ray) { return trace_surface(view, ray, options); });
   return Status::Ok();
 }
 
