@@ -25,6 +25,7 @@
 #include "primary_render.h"
 #include "progress_bar.h"
 #include "shading.h"
+#include "trace_level.h"
 
 namespace {
 
@@ -171,11 +172,9 @@ int main(int argc, char** argv) {
   }
   if (app.count("--threads") && threads < 1) return fail("--threads must be at least 1");
 
-  const bool solid_angle = mode_name == "solid-angle";
   gwnrt::TraceOptions trace = defaults;
-  trace.mode = solid_angle ? gwnrt::TraceMode::kSolidAngle : gwnrt::TraceMode::kWindingNumber;
-  // The tracer works in units of w in both modes: an angle Ω* is the level Ω*/(4π).
-  trace.level = solid_angle ? float(level.value_or(2.0 * gwnrt::kPi) / (4.0 * gwnrt::kPi)) : float(level.value_or(0.5));
+  gwnrt::examples::set_trace_surface(mode_name, level, trace);
+  const bool solid_angle = trace.mode == gwnrt::TraceMode::kSolidAngle;
   trace.epsilon = float(epsilon);
   trace.max_steps = uint32_t(max_steps);
   trace.beta = float(beta);

@@ -22,6 +22,7 @@
 #include "gwnrt/model.h"
 #include "point_io.h"
 #include "progress_bar.h"
+#include "trace_level.h"
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "gwnrt/cuda.h"
@@ -107,7 +108,7 @@ int main(int argc, char** argv) {
                kProgram};
 
   std::string mesh_path, rays_path, output_path = "-", mode = "gwn", device = "cpu";
-  std::optional<float> level;
+  std::optional<double> level;
   gwnrt::TraceOptions options;
   int threads = 0;
   bool verbose = false;
@@ -133,12 +134,7 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
   CLI11_PARSE(app, argc, argv);
 
-  if (mode == "solid-angle") {
-    options.mode = gwnrt::TraceMode::kSolidAngle;
-    options.level = float(level.value_or(float(2.0 * gwnrt::kPi)) / (4.0 * gwnrt::kPi));
-  } else {
-    options.level = level.value_or(0.5f);
-  }
+  gwnrt::examples::set_trace_surface(mode, level, options);
   if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(s.message());
   const bool chatty = verbose || ::isatty(2) == 1;
 

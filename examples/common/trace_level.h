@@ -1,0 +1,20 @@
+// How the command-line programs name a traced surface: --mode gwn|solid-angle and --level, where
+// the level is a value of w in gwn mode and an angle in radians in solid-angle mode.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "gwnrt/surface_trace.h"
+
+namespace gwnrt::examples {
+
+// Sets options.mode and options.level. The tracer works in units of w in both modes: an angle Ω*
+// is the level Ω*/(4π); the defaults (w = 1/2, Ω = 2π) are the same level.
+inline void set_trace_surface(const std::string& mode, std::optional<double> level, TraceOptions& options) {
+  const bool solid_angle = mode == "solid-angle";
+  options.mode = solid_angle ? TraceMode::kSolidAngle : TraceMode::kWindingNumber;
+  options.level = solid_angle ? float(level.value_or(2.0 * kPi) / (4.0 * kPi)) : float(level.value_or(0.5));
+}
+
+}  // namespace gwnrt::examples
