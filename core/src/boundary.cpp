@@ -1,6 +1,7 @@
 // ∂M and the small tree over it that serves distance-to-boundary (and, later, Harnack radii).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <span>
 
@@ -119,13 +120,68 @@ Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of
     sum[loop_of_segment[s]] += dvec3(curve.endpoints[2 * s]) + dvec3(curve.endpoints[2 * s + 1]);
     count[loop_of_segment[s]] += 2;
   }
+  std::vector<vec3> apex(loop_count);
+  for (uint32_t l = 0; l < loop_count; ++l) apex[l] = vec3(sum[l] / count[l]);
+  // A cone triangle whose apex lies on its segment's line has zero area and is left out of the
+  // tree, and the tracer reads ∂M off the tree's triangles (phase.h): the apex is moved off
+  // every such line. A loop lying on one line is the exception: its segments cancel (their
+  // field is zero), so nothing is lost with them.
+  std::vector<std::vector<uint32_t>> segments_of(loop_count);
+  for (uint32_t s = 0; s < n; ++s) segments_of[loop_of_segment[s]].push_back(s);
+  for (uint32_t l = 0; l < loop_count; ++l) {
+    const std::vector<uint32_t>& seg = segments_of[l];
+    const vec3 a0 = curve.endpoints[2 * seg[0]], b0 = curve.endpoints[2 * seg[0] + 1];
+    Aabb box;
+    bool on_one_line = true;
+    for (uint32_t s : seg)
+      for (int k = 0; k < 2; ++k) {
+        box.extend(curve.endpoints[2 * s + k]);
+        on_one_line = on_one_line && is_degenerate_triangle(a0, b0, curve.endpoints[2 * s + k]);
+      }
+    if (on_one_line) continue;
+    auto collinear = [&](const vec3& z) {
+      for (uint32_t s : seg)
+        if (is_degenerate_triangle(z, curve.endpoints[2 * s], curve.endpoints[2 * s + 1])) return true;
+      return false;
+    };
+    const float size = glm::length(box.hi - box.lo);
+    for (int attempt = 1; attempt <= 8 && collinear(apex[l]); ++attempt) {
+      // Directions far from any axis, so that grid-aligned loops cannot keep the apex on a line.
+      const vec3 direction = glm::normalize(vec3(0.5773f, 0.6172f + 0.1f * attempt, 0.5345f - 0.07f * attempt));
+      apex[l] = vec3(sum[l] / count[l]) + (1e-3f * float(attempt) * size) * direction;
+    }
+  }
   cone.positions.reserve(2 * n + loop_count);
   cone.positions.insert(cone.positions.end(), curve.endpoints.begin(), curve.endpoints.end());
-  for (uint32_t l = 0; l < loop_count; ++l) cone.positions.push_back(vec3(sum[l] / count[l]));
+  cone.positions.insert(cone.positions.end(), apex.begin(), apex.end());
   cone.triangles.reserve(n);
   for (uint32_t s = 0; s < n; ++s)
     cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
   return cone;
+}
+
+std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone) {
+  std::vector<WideNodeLength> lengths(cone.bvh.nodes.size(), WideNodeLength{});
+  // Bottom-up, in double (a long curve of short segments would lose its tail in float), and
+  // rounded up so that the float total still bounds the true one.
+  auto node_length = [&](auto& self, uint32_t index) -> double {
+    const WideNode& node = cone.bvh.nodes[index];
+    double total = 0;
+    for (int l = 0; l < kBvhWidth; ++l) {
+      double lane = 0;
+      if (node.count[l] > 0) {
+        for (uint32_t t = node.child[l]; t < node.child[l] + node.count[l]; ++t)
+          lane += glm::length(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
+      } else if (node.child[l] != kEmptyLane) {
+        lane = self(self, node.child[l]);
+      }
+      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinityF) : 0.0f;
+      total += lane;
+    }
+    return total;
+  };
+  if (!cone.bvh.nodes.empty()) node_length(node_length, 0);
+  return lengths;
 }
 
 SegmentTreeView SegmentTree::view() const {

@@ -70,6 +70,7 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   const std::vector<uint32_t> loop_of_segment = boundary_loops(model.boundary_, loop_count);
   const Mesh cone = boundary_cone(model.boundary_, loop_of_segment, loop_count);
   model.cone_ = build_triangle_tree(cone, options.max_leaf_triangles);
+  model.cone_lengths_ = gwnrt::cone_boundary_lengths(model.cone_);
   model.smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
   double area = 0;
   for (const uvec3& t : model.mesh_.triangles) {
@@ -90,8 +91,16 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
 }
 
 ModelView GwnModel::view() const {
-  return {triangles_.view(),        boundary_tree_.view(), cone_.view(), smooth_regions_.data(),
-          uint32_t(smooth_regions_.size()), bounds_,             surface_margin_};
+  ModelView v;
+  v.triangles = triangles_.view();
+  v.boundary = boundary_tree_.view();
+  v.cone = cone_.view();
+  v.cone_boundary_lengths = cone_lengths_.data();
+  v.smooth_regions = smooth_regions_.data();
+  v.smooth_region_count = uint32_t(smooth_regions_.size());
+  v.bounds = bounds_;
+  v.surface_margin = surface_margin_;
+  return v;
 }
 
 }  // namespace gwnrt

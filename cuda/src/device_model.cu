@@ -33,6 +33,7 @@ struct DeviceTriangleTree {
 struct DeviceModel::Buffers {
   DeviceTriangleTree triangles;
   DeviceTriangleTree cone;
+  DeviceBuffer<WideNodeLength> cone_lengths;
   DeviceBuffer<WideNode> segment_nodes;
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
@@ -68,11 +69,14 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   if (Status s = b->triangles.upload(model.triangle_tree(), v.triangles); !s.ok()) return s;
   if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
   const SegmentTree& st = model.boundary_tree();
-  for (Status s : {b->segment_nodes.upload(st.bvh.nodes), b->endpoints.upload(st.endpoints),
+  const std::span<const WideNodeLength> lengths = model.cone_boundary_lengths();
+  for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()), b->segment_nodes.upload(st.bvh.nodes),
+                   b->endpoints.upload(st.endpoints),
                    b->segment_ids.upload(st.segment_ids),
                    b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
     if (!s.ok()) return s;
   v.smooth_regions = b->smooth_regions.get();
+  v.cone_boundary_lengths = b->cone_lengths.get();
   v.boundary.bvh.nodes = b->segment_nodes.get();
   v.boundary.endpoints = b->endpoints.get();
   v.boundary.segment_ids = b->segment_ids.get();

@@ -45,6 +45,12 @@ struct alignas(16) WideNodeOrder2 {
   float e[3][kBvhWidth];
 };
 
+// Per lane: the total length of some curve below it (the cone's share of ∂M, ModelView), so that
+// a whole far cluster's share of the tracer's Biot–Savart bound (phase.h) costs one division.
+struct alignas(16) WideNodeLength {
+  float length[kBvhWidth];
+};
+
 // Near-first traversal: a stack entry (a node and how near it is: entry distance along a ray, or
 // squared distance to a point), and the push that sorts a node's inner children so that the
 // nearest is popped next.
@@ -85,6 +91,7 @@ struct SegmentTreeView {
   const vec3* endpoints = nullptr;        // 2 per segment, in leaf order
   const uint32_t* segment_ids = nullptr;  // leaf order -> boundary segment index
   uint32_t segment_count = 0;
+  const WideNodeLength* lengths = nullptr;  // per node, parallel to bvh.nodes
 };
 
 struct Aabb {

@@ -43,16 +43,35 @@ using sym3 = Sym3<float>;
 template <class T>
 GWNRT_HD inline T sqr(T x) { return x * x; }
 
-// A bit test rather than std::isfinite: under -ffast-math the compiler may assume that no NaN
-// or infinity exists and fold std::isfinite to true, which would disable input checks. It also
-// reads the same on the host and the device.
-GWNRT_HD inline bool is_finite(float x) {
+// The bits of a float and back, the same on the host and the device.
+GWNRT_HD inline uint32_t float_bits(float x) {
 #if defined(__CUDA_ARCH__)
-  return (__float_as_uint(x) & 0x7f800000u) != 0x7f800000u;
+  return __float_as_uint(x);
 #else
-  return (__builtin_bit_cast(uint32_t, x) & 0x7f800000u) != 0x7f800000u;
+  return __builtin_bit_cast(uint32_t, x);
 #endif
 }
+GWNRT_HD inline float bits_float(uint32_t u) {
+#if defined(__CUDA_ARCH__)
+  return __uint_as_float(u);
+#else
+  return __builtin_bit_cast(float, u);
+#endif
+}
+
+// A bit test rather than std::isfinite: under -ffast-math the compiler may assume that no NaN
+// or infinity exists and fold std::isfinite to true, which would disable input checks.
+GWNRT_HD inline bool is_finite(float x) { return (float_bits(x) & 0x7f800000u) != 0x7f800000u; }
+
+// 2^-e for the binary exponent e of m > 0, so that m·scale lies in [1, 2): an exact rescaling
+// (no rounding) that costs no division. Huge m saturate at 2^-126, zero or subnormal m get 2^127 (and
+// m·scale stays below 2).
+GWNRT_HD inline float power_of_two_scale(float m) {
+  uint32_t exponent = float_bits(m) & 0x7f800000u;
+  exponent = exponent > 0x7e800000u ? 0x7e800000u : exponent;
+  return bits_float(0x7f000000u - exponent);
+}
+
 GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinityF && x != -kInfinityF; }
 
 }  // namespace gwnrt

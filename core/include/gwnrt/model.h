@@ -49,6 +49,9 @@ std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_
 // of M and C agree on shared edges).
 Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count);
 
+// Per lane of the cone's tree, the length of ∂M below it (the edge 1 -> 2 of each cone triangle).
+std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone);
+
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
 SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
 
@@ -74,6 +77,7 @@ class GwnModel {
   TriangleTreeView triangle_view() const { return triangles_.view(); }
   SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
   const TriangleTree& cone_tree() const { return cone_; }
+  std::span<const WideNodeLength> cone_boundary_lengths() const { return cone_lengths_; }
   std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
   const Aabb& bounds() const { return bounds_; }
   float surface_margin() const { return surface_margin_; }
@@ -86,6 +90,7 @@ class GwnModel {
   BoundaryCurve boundary_;
   SegmentTree boundary_tree_;
   TriangleTree cone_;
+  std::vector<WideNodeLength> cone_lengths_;
   std::vector<SmoothRegion> smooth_regions_;
   Aabb bounds_;
   float surface_margin_ = 0;

@@ -27,6 +27,9 @@ struct ModelView {
   // boundary vertices. M − C is closed, so w − w_C is an integer off M ∪ C and w mod 1 =
   // w_C mod 1 (DESIGN §3): the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
   TriangleTreeView cone;
+  // Per node of the cone's tree: the length of ∂M below each lane (its triangles' edges 1 -> 2
+  // are exactly the segments of ∂M), for the tracer's bound on |∇w| (phase.h).
+  const WideNodeLength* cone_boundary_lengths = nullptr;
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M

@@ -10,16 +10,71 @@ namespace gwnrt {
 // Signed solid angle Ω of triangle (p0, p1, p2) seen from x, in (-2π, 2π); positive when x is
 // on the side opposite to the normal (p1-p0)×(p2-p0) (van Oosterom–Strackee).
 // T = float for the fast path, double for the reference.
+// The two arguments of its atan2: Ω = 2 atan2(numerator, denominator). Kept apart for sums
+// wanted only modulo 4π (HalfAngleSum).
+template <class T>
+struct SolidAngleTangent {
+  T numerator, denominator;
+};
+
+// From the corners relative to x (a, b, c), their lengths, b × c and b·c: the pieces a caller
+// may already have (the tracer shares them with its bound on the edge b -> c, phase.h).
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE SolidAngleTangent<T> solid_angle_tangent(const glm::vec<3, T>& a, const glm::vec<3, T>& b,
+                                                                    const glm::vec<3, T>& c, T la, T lb, T lc,
+                                                                    const glm::vec<3, T>& b_cross_c, T b_dot_c) {
+  return {glm::dot(a, b_cross_c), la * lb * lc + glm::dot(a, b) * lc + b_dot_c * la + glm::dot(c, a) * lb};
+}
+
+template <class T>
+GWNRT_HD inline SolidAngleTangent<T> triangle_solid_angle_tangent(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
+                                                                  const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
+  const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
+  return solid_angle_tangent(a, b, c, glm::length(a), glm::length(b), glm::length(c), glm::cross(b, c), glm::dot(b, c));
+}
+
 template <class T>
 GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                        const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
-  const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
-  const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-  const T numerator = glm::dot(a, glm::cross(b, c));
-  const T denominator = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
+  const SolidAngleTangent<T> tangent = triangle_solid_angle_tangent(p0, p1, p2, x);
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
-  return T(2) * atan2(numerator, denominator);
+  return T(2) * atan2(tangent.numerator, tangent.denominator);
 }
+
+// Σ atan2(numerator_i, denominator_i) modulo 2π, as the argument of the product of the complex
+// numbers denominator_i + i·numerator_i: one atan2 at the end instead of one per term. Only the
+// product's direction matters, so factors are rescaled by exact powers of two (no division on
+// the chain of multiplications, which would set its pace) and the products every 16 factors,
+// which keeps them far from overflow and underflow. A zero factor (x on a vertex, a zero-area
+// triangle) has no angle and is skipped.
+struct HalfAngleSum {
+  // Two products, alternated and multiplied together at the end: each multiplication then waits
+  // on the one two factors back, which halves the latency of the chain.
+  float re = 1.0f, im = 0.0f, other_re = 1.0f, other_im = 0.0f;
+  uint32_t unscaled = 0;
+  GWNRT_HD void add(const SolidAngleTangent<float>& t) {
+    if (t.numerator == 0.0f && t.denominator == 0.0f) return;
+    const float s = power_of_two_scale(fmaxf(fabsf(t.numerator), fabsf(t.denominator)));
+    const float zr = t.denominator * s, zi = t.numerator * s;  // |z| in [1, 2√2)
+    const float r = re * zr - im * zi, i = re * zi + im * zr;
+    re = other_re;
+    im = other_im;
+    other_re = r;
+    other_im = i;
+    if (++unscaled == 16) {  // each product has taken 8 factors: at most 2^12 larger
+      const float p = power_of_two_scale(fmaxf(fabsf(re), fabsf(im)));
+      const float q = power_of_two_scale(fmaxf(fabsf(other_re), fabsf(other_im)));
+      re *= p;
+      im *= p;
+      other_re *= q;
+      other_im *= q;
+      unscaled = 0;
+    }
+  }
+  GWNRT_HD float angle() const {  // in (-π, π]
+    return atan2f(re * other_im + im * other_re, re * other_re - im * other_im);
+  }
+};
 
 namespace detail {
 

@@ -14,6 +14,7 @@
 
 #include "gwnrt/harnack.h"
 #include "gwnrt/model_view.h"
+#include "gwnrt/phase.h"
 #include "gwnrt/ray.h"
 #include "gwnrt/winding_number.h"
 
@@ -61,20 +62,10 @@ inline constexpr float kBoxPadAbsolute = 1e-30f;
 
 namespace detail {
 
-// w_C at x (φ = its fractional part), optionally ∇w (= ∇w_C off M ∪ C).
-GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const vec3& x, const TraceOptions& o,
-                                          vec3* gradient) {
-  if (o.exact) {
-    const WindingSampleExact s = winding_number_exact(cone, x, gradient != nullptr);
-    if (gradient) *gradient = vec3(s.gradient);
-    return float(s.w);
-  }
-  if (gradient) {
-    const WindingSample s = winding_number_taylor<2, true, false, true>(cone, x, o.beta);
-    *gradient = s.gradient;
-    return s.w;
-  }
-  return winding_number_taylor<2, false, false>(cone, x, o.beta).w;
+// w_C at x: where the march starts, the integer part of w comes from it (sample_phase has only
+// φ = w_C mod 1).
+GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const vec3& x, const TraceOptions& o) {
+  return o.exact ? float(winding_number_exact(cone, x).w) : winding_number_taylor<2, false, false>(cone, x, o.beta).w;
 }
 
 GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
@@ -164,7 +155,7 @@ class SurfaceTracer {
     // march[0] starts at or after t_start; the start lies in a region exactly when they meet.
     const bool start_in_region = march_count > 0 && march[0].a <= t_start;
     float w_start = 0.0f;
-    if (start_in_region) w_start = cone_winding_number(m_.cone, point(t_start), o_, nullptr);
+    if (start_in_region) w_start = cone_winding_number(m_.cone, point(t_start), o_);
     if (sheets_) {
       // The integer part of w at the start: crossings of the closed M − C since the line entered
       // M's box (which holds C), where w = w_C.
@@ -180,7 +171,7 @@ class SurfaceTracer {
       const float a = fmaxf(march[k].a, t_start), b = fminf(march[k].b, t_end_);
       if (!(a <= b)) continue;
       if (sheets_ && walk_crossings_until(a)) return hit_;
-      if (this->march(a, b, k == 0 && start_in_region, w_start)) return hit_;
+      if (this->march(a, b)) return hit_;
     }
     if (sheets_) walk_crossings_until(t_end_);
     return hit_;
@@ -226,7 +217,7 @@ class SurfaceTracer {
   }
 
   // Harnack steps on φ over [t, t_end]; true when the trace ended (a hit, or a cap).
-  GWNRT_HD bool march(float t, float t_end, bool have_w, float w_at_t) {
+  GWNRT_HD bool march(float t, float t_end) {
     float t_prev = t, rho_prev = 0.0f;
     bool overstepped = false, gradient_wanted = false;
     int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
@@ -238,16 +229,17 @@ class SurfaceTracer {
       }
       ++hit_.steps;
       const vec3 x = point(t);
-      // Near ∂M the stopping test needs ∇w at almost every step; then w and ∇w come from one
-      // traversal instead of two.
-      vec3 g(0.0f);
-      const bool have_g = !have_w && gradient_wanted;
-      const float w = have_w ? w_at_t : cone_winding_number(m_.cone, x, o_, have_g ? &g : nullptr);
-      have_w = false;
-      const float phi = w - floorf(w);
-      const float radius = boundary_distance(m_.boundary, x).distance;
+      // Near ∂M the stopping test needs ∇w at almost every step; then it comes with φ.
+      PhaseSample sample = sample_phase(m_, x, o_.beta, gradient_wanted, o_.exact);
+      const bool have_gradient = gradient_wanted;
+      const float phi = sample.phi, radius = sample.boundary_distance;
       const LevelBracket levels = bracket_levels(phi, phase_);
-      const float rho = angle_valued_step(radius, phi, levels);
+      const float gap_below = phi - levels.below, gap_above = levels.above - phi;
+      const float gap = fminf(gap_below, gap_above);
+      // Two safe steps; either keeps φ off the levels, so the longer is taken (fmaxf also drops
+      // the NaN of the second on ∂M itself).
+      const float rho =
+          fmaxf(angle_valued_step(radius, phi, levels), gradient_bound_step(radius, sample.gradient_bound, gap));
       if (overstepped && t - t_prev > rho_prev + rho) {  // the long step was not covered
         t = t_prev + rho_prev;
         overstepped = false;
@@ -263,11 +255,10 @@ class SurfaceTracer {
         if (pending > 0 ? lifted >= pending_level : lifted <= pending_level) band_ += pending;
         pending = 0;
       }
-      const float gap_below = phi - levels.below, gap_above = levels.above - phi;
-      const float gap = fminf(gap_below, gap_above);
-      gradient_wanted = gap <= eps_ * harnack_gradient_bound(radius, phi);
+      gradient_wanted = gap <= eps_ * fminf(sample.gradient_bound, harnack_gradient_bound(radius, phi));
       if (gradient_wanted) {
-        if (!have_g) cone_winding_number(m_.cone, x, o_, &g);
+        if (!have_gradient) sample = sample_phase(m_, x, o_.beta, true, o_.exact);
+        const vec3 g = sample.gradient;
         const float gn = glm::length(g);
         if (gap <= eps_ * gn) {
           const bool at_above = gap_above <= gap_below;

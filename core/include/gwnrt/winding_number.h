@@ -47,16 +47,13 @@ GWNRT_HD GWNRT_FORCEINLINE void load_lane_moments(const TriangleTreeView& tree, 
 // expanding leaves, with 40-70% fewer exact triangle terms and 15-30% less time).
 inline constexpr float kLeafExpansionScale = 1.5f;
 
-// w (and optionally ∇w, H_w) at x by the multipole tree. A cluster whose ball (centre p̄,
-// radius r) has |x - p̄| > beta·r (leaves: kLeafExpansionScale·beta·r) is replaced by its
-// expansion of the given order; nearer leaves are summed exactly, nearer inner clusters opened.
-// PreciseNearGradient sums the exact near-field gradient terms in double: the tracer's cone has
-// triangles meeting along long inner edges whose large Biot–Savart terms cancel, and in float
-// that cancellation leaves errors of 1e-2 in the normal just above a flat cone.
-template <int Order, bool WantGradient, bool WantHessian, bool PreciseNearGradient = false>
-GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const vec3& x, float beta) {
-  FieldAccumulator<float> acc;
-  dvec3 near_gradient(0.0);
+// The multipole traversal shared by every evaluation of a triangle tree. A cluster whose ball
+// (centre p̄, radius r) has |x - p̄| > beta·r (leaves: kLeafExpansionScale·beta·r) is handed to
+// visitor.far(node, lane, d = p̄ - x); the triangles of nearer leaves to
+// visitor.near(p0, p1, p2); nearer inner clusters are opened.
+template <class Visitor>
+GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, const vec3& x, float beta,
+                                                Visitor& visitor) {
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = 0;
@@ -72,9 +69,7 @@ GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const
       // Empty lanes have a NaN centre, so they never pass this test.
       const float scale2 = node.count[l] == 0 ? inner_scale2 : leaf_scale2;
       if (r2 > scale2 * ex.radius[l] * ex.radius[l]) {
-        float n[3], s[6], p[10], e[3];
-        detail::load_lane_moments(tree, ni, l, Order, n, s, p, e);
-        add_far_field<Order, WantGradient, WantHessian>(n, s, p, e, d, acc);
+        visitor.far(ni, l, d);
         continue;
       }
       const uint32_t child = node.child[l];
@@ -83,29 +78,57 @@ GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const
         stack[sp++] = child;
         continue;
       }
-      for (uint32_t t = child; t < child + node.count[l]; ++t) {
-        const vec3& p0 = tree.vertices[3 * t];
-        const vec3& p1 = tree.vertices[3 * t + 1];
-        const vec3& p2 = tree.vertices[3 * t + 2];
-        acc.omega += triangle_solid_angle(p0, p1, p2, x);
-        if constexpr (WantHessian) {
-          vec3 g;
-          sym3 h;
-          triangle_solid_angle_derivatives(p0, p1, p2, x, g, h);
-          if constexpr (WantGradient) acc.gradient += g;
-          acc.hessian += h;
-        } else if constexpr (WantGradient && PreciseNearGradient) {
-          near_gradient += triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x));
-        } else if constexpr (WantGradient) {
-          acc.gradient += triangle_solid_angle_gradient(p0, p1, p2, x);
-        }
-      }
+      for (uint32_t t = child; t < child + node.count[l]; ++t)
+        visitor.near(tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2]);
     }
   }
+}
+
+// The far-field part every visitor shares: the expansion of one cluster added to `acc`.
+template <int Order, bool WantGradient, bool WantHessian>
+GWNRT_HD GWNRT_FORCEINLINE void add_cluster_far_field(const TriangleTreeView& tree, uint32_t node, int lane,
+                                                      const vec3& d, FieldAccumulator<float>& acc) {
+  float n[3], s[6], p[10], e[3];
+  detail::load_lane_moments(tree, node, lane, Order, n, s, p, e);
+  add_far_field<Order, WantGradient, WantHessian>(n, s, p, e, d, acc);
+}
+
+namespace detail {
+
+template <int Order, bool WantGradient, bool WantHessian>
+struct TaylorSum {
+  const TriangleTreeView& tree;
+  const vec3& x;
+  FieldAccumulator<float> acc;
+  GWNRT_HD void far(uint32_t node, int lane, const vec3& d) {
+    add_cluster_far_field<Order, WantGradient, WantHessian>(tree, node, lane, d, acc);
+  }
+  GWNRT_HD void near(const vec3& p0, const vec3& p1, const vec3& p2) {
+    acc.omega += triangle_solid_angle(p0, p1, p2, x);
+    if constexpr (WantHessian) {
+      vec3 g;
+      sym3 h;
+      triangle_solid_angle_derivatives(p0, p1, p2, x, g, h);
+      if constexpr (WantGradient) acc.gradient += g;
+      acc.hessian += h;
+    } else if constexpr (WantGradient) {
+      acc.gradient += triangle_solid_angle_gradient(p0, p1, p2, x);
+    }
+  }
+};
+
+}  // namespace detail
+
+// w (and optionally ∇w, H_w) at x by the multipole tree: far clusters by their expansion of
+// the given order, near triangles exactly.
+template <int Order, bool WantGradient, bool WantHessian>
+GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const vec3& x, float beta) {
+  detail::TaylorSum<Order, WantGradient, WantHessian> sum{tree, x, {}};
+  visit_multipole(tree, x, beta, sum);
   WindingSample out;
-  out.w = acc.omega * kInv4Pi;
-  out.gradient = (acc.gradient + vec3(near_gradient)) * kInv4Pi;
-  out.hessian = acc.hessian * kInv4Pi;
+  out.w = sum.acc.omega * kInv4Pi;
+  out.gradient = sum.acc.gradient * kInv4Pi;
+  out.hessian = sum.acc.hessian * kInv4Pi;
   return out;
 }
 
