@@ -34,7 +34,7 @@ GWNRT_HD inline LevelBracket bracket_levels(float phi, float phase) {
 inline constexpr float kAngleLowerBound = -1.0f;
 
 GWNRT_HD inline float angle_valued_step(float radius, float phi, const LevelBracket& levels) {
-  return fminf(harnack_step(radius, phi, levels.below, kAngleLowerBound),
+  return min_of(harnack_step(radius, phi, levels.below, kAngleLowerBound),
                harnack_step(radius, phi, levels.above, kAngleLowerBound));
 }
 

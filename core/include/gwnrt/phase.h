@@ -38,7 +38,7 @@ GWNRT_HD inline float segment_inverse_square_integral(float p, float u_dot_v, fl
   // Q without cancellation when α is near π (x beside the segment): P + u·v = |u×v|² / (P - u·v).
   const float q = cross2 / (p - u_dot_v);
   if (!(q > 0.0f)) return kInfinity;
-  return length * fminf(2.0f / q, float(kPi) / sqrtf(2.0f * p * q));
+  return length * min_of(2.0f / q, float(kPi) / sqrtf(2.0f * p * q));
 }
 
 namespace detail {
@@ -57,10 +57,10 @@ struct PhaseSum {
   GWNRT_HD void far(uint32_t node, int lane, const vec3& d) {
     add_cluster_far_field<2, WantGradient, false>(tree, node, lane, d, far_field);
     // Every point of the cluster is within its radius of the centre, and inside its box.
-    const float ball = fmaxf(glm::length(d) - tree.expansion[node].radius[lane], 0.0f);
-    const float d2 = fmaxf(ball * ball, box_distance2(tree.bvh.nodes[node], lane, x));
+    const float ball = max_of(glm::length(d) - tree.expansion[node].radius[lane], 0.0f);
+    const float d2 = max_of(ball * ball, box_distance2(tree.bvh.nodes[node], lane, x));
     integral += lengths[node].length[lane] / d2;
-    nearest2 = fminf(nearest2, d2);
+    nearest2 = min_of(nearest2, d2);
   }
 
   // In double: the cone's inner edges (apex to boundary) are singular lines of each of their

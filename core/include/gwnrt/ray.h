@@ -57,11 +57,16 @@ GWNRT_HD inline RayFrame make_ray_frame(const vec3& origin, const vec3& directio
 
 namespace detail {
 
-// Sign of the projected edge function Qx·Py − Qy·Px at the (perturbed) ray. The products of
-// floats are exact in double, so the value for edge P→Q is exactly the negation of the value
-// for Q→P whatever the compiler contracts; the perturbation keeps that antisymmetry.
-GWNRT_HD GWNRT_FORCEINLINE int edge_sign(float px, float py, float qx, float qy, double& value) {
-  value = double(qx) * double(py) - double(qy) * double(px);
+// The projected edge function Qx·Py − Qy·Px at the ray. The products of floats are exact in
+// double, so the value for edge P→Q is exactly the negation of the value for Q→P whatever the
+// compiler contracts.
+GWNRT_HD GWNRT_FORCEINLINE double edge_value(float px, float py, float qx, float qy) {
+  return double(qx) * double(py) - double(qy) * double(px);
+}
+
+// Its sign at the perturbed ray: a zero value is decided by the perturbation, which keeps the
+// antisymmetry.
+GWNRT_HD GWNRT_FORCEINLINE int edge_sign(float px, float py, float qx, float qy, double value) {
   if (value != 0.0) return value > 0 ? 1 : -1;
   const float dy = qy - py;
   if (dy != 0.0f) return dy > 0 ? 1 : -1;
@@ -81,11 +86,19 @@ GWNRT_HD GWNRT_FORCEINLINE bool triangle_crossing(const RayFrame& f, const vec3&
   const float ax = a[f.kx] - f.sx * a[f.kz], ay = a[f.ky] - f.sy * a[f.kz];
   const float bx = b[f.kx] - f.sx * b[f.kz], by = b[f.ky] - f.sy * b[f.kz];
   const float cx = c[f.kx] - f.sx * c[f.kz], cy = c[f.ky] - f.sy * c[f.kz];
-  double u, v, w;
-  const int su = detail::edge_sign(bx, by, cx, cy, u);
-  const int sv = detail::edge_sign(cx, cy, ax, ay, v);
-  const int sw = detail::edge_sign(ax, ay, bx, by, w);
-  if (su == 0 || su != sv || su != sw) return false;
+  // Most triangles a ray is tested against are missed by a clear margin: the three signs are
+  // combined without branches, and only an exact zero (the ray through an edge's line) takes
+  // the symbolic tie-break.
+  const double u = detail::edge_value(bx, by, cx, cy), v = detail::edge_value(cx, cy, ax, ay),
+               w = detail::edge_value(ax, ay, bx, by);
+  if ((u == 0.0) | (v == 0.0) | (w == 0.0)) {
+    const int su = detail::edge_sign(bx, by, cx, cy, u);
+    const int sv = detail::edge_sign(cx, cy, ax, ay, v);
+    const int sw = detail::edge_sign(ax, ay, bx, by, w);
+    if (su == 0 || su != sv || su != sw) return false;
+  } else if (((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0))) {
+    return false;
+  }
   const double det = u + v + w;
   if (det == 0.0) return false;
   const double tz = u * double(f.sz * a[f.kz]) + v * double(f.sz * b[f.kz]) + w * double(f.sz * c[f.kz]);
@@ -96,25 +109,29 @@ GWNRT_HD GWNRT_FORCEINLINE bool triangle_crossing(const RayFrame& f, const vec3&
   return true;
 }
 
-// Slab test of one BVH lane against [t_lo, t_hi]; returns the entry distance or +inf on a miss.
-// The exit is widened by a few ulps so that round-off never drops a triangle whose own test
-// hits (the robust bound of pbrt's ray-box test).
-GWNRT_HD GWNRT_FORCEINLINE float lane_entry(const WideNode& node, int lane, const RayFrame& f, float t_lo, float t_hi) {
-  float t0 = t_lo, t1 = t_hi;
-  for (int k = 0; k < 3; ++k) {
-    float a = (node.lo[k][lane] - f.origin[k]) * f.inv_direction[k];
-    float b = (node.hi[k][lane] - f.origin[k]) * f.inv_direction[k];
-    if (a > b) {
-      const float s = a;
-      a = b;
-      b = s;
-    }
-    a -= fabsf(a) * 4e-7f;
-    b += fabsf(b) * 4e-7f;
-    t0 = a > t0 ? a : t0;
-    t1 = b < t1 ? b : t1;
+// Slab test of the four lanes of a node against [t_lo, t_hi]: each lane's entry distance, or
+// +inf on a miss. The exit is widened by a few ulps so that round-off never drops a triangle
+// whose own test hits (the robust bound of pbrt's ray-box test). Written lane-parallel, without
+// branches, so that the compiler can test the four lanes at once.
+GWNRT_HD GWNRT_FORCEINLINE void lane_entries(const WideNode& node, const RayFrame& f, float t_lo, float t_hi,
+                                             float entry[kBvhWidth]) {
+  float t0[kBvhWidth], t1[kBvhWidth];
+  for (int l = 0; l < kBvhWidth; ++l) {
+    t0[l] = t_lo;
+    t1[l] = t_hi;
   }
-  return t0 <= t1 ? t0 : kInfinity;
+  for (int k = 0; k < 3; ++k) {
+    for (int l = 0; l < kBvhWidth; ++l) {
+      const float a = (node.lo[k][l] - f.origin[k]) * f.inv_direction[k];
+      const float b = (node.hi[k][l] - f.origin[k]) * f.inv_direction[k];
+      float near = a < b ? a : b, far = a < b ? b : a;
+      near -= fabsf(near) * 4e-7f;
+      far += fabsf(far) * 4e-7f;
+      t0[l] = near > t0[l] ? near : t0[l];
+      t1[l] = far < t1[l] ? far : t1[l];
+    }
+  }
+  for (int l = 0; l < kBvhWidth; ++l) entry[l] = t0[l] <= t1[l] ? t0[l] : kInfinity;
 }
 
 struct CrossingHit {
@@ -141,12 +158,12 @@ GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, con
     const WideNode& node = bvh.nodes[e.node];
     NearFirstEntry inner[kBvhWidth];
     int inner_count = 0;
+    float entry[kBvhWidth];
+    lane_entries(node, f, t_after, best_t, entry);
     for (int l = 0; l < kBvhWidth; ++l) {
-      if (node.child[l] == kEmptyLane) continue;
-      const float entry = lane_entry(node, l, f, t_after, best_t);
-      if (entry == kInfinity) continue;
+      if (node.child[l] == kEmptyLane || entry[l] == kInfinity) continue;
       if (node.count[l] == 0) {
-        inner[inner_count++] = {node.child[l], entry};
+        inner[inner_count++] = {node.child[l], entry[l]};
         continue;
       }
       for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
@@ -176,8 +193,10 @@ GWNRT_HD inline int crossing_sum(const BvhView& bvh, const vec3* vertices, const
   stack[sp++] = 0;
   while (sp > 0) {
     const WideNode& node = bvh.nodes[stack[--sp]];
+    float entry[kBvhWidth];
+    lane_entries(node, f, t_lo, t_hi, entry);
     for (int l = 0; l < kBvhWidth; ++l) {
-      if (node.child[l] == kEmptyLane || lane_entry(node, l, f, t_lo, t_hi) == kInfinity) continue;
+      if (node.child[l] == kEmptyLane || entry[l] == kInfinity) continue;
       if (node.count[l] == 0) {
         stack[sp++] = node.child[l];
         continue;

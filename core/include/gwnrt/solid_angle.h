@@ -54,7 +54,7 @@ struct HalfAngleSum {
   uint32_t unscaled = 0;
   GWNRT_HD void add(const SolidAngleTangent<float>& t) {
     if (t.numerator == 0.0f && t.denominator == 0.0f) return;
-    const float s = power_of_two_scale(fmaxf(fabsf(t.numerator), fabsf(t.denominator)));
+    const float s = power_of_two_scale(max_of(fabsf(t.numerator), fabsf(t.denominator)));
     const float zr = t.denominator * s, zi = t.numerator * s;  // |z| in [1, 2√2)
     const float r = re * zr - im * zi, i = re * zi + im * zr;
     re = other_re;
@@ -62,8 +62,8 @@ struct HalfAngleSum {
     other_re = r;
     other_im = i;
     if (++unscaled == 16) {  // each product has taken 8 factors: at most 2^12 larger
-      const float p = power_of_two_scale(fmaxf(fabsf(re), fabsf(im)));
-      const float q = power_of_two_scale(fmaxf(fabsf(other_re), fabsf(other_im)));
+      const float p = power_of_two_scale(max_of(fabsf(re), fabsf(im)));
+      const float q = power_of_two_scale(max_of(fabsf(other_re), fabsf(other_im)));
       re *= p;
       im *= p;
       other_re *= q;

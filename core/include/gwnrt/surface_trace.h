@@ -99,7 +99,7 @@ class SurfaceTracer {
     } march[kMaxSmoothRegions];
     int march_count = 0;
     if (smooth_) {
-      const float delta = fminf(phase_, 1.0f - phase_);
+      const float delta = min_of(phase_, 1.0f - phase_);
       const uint32_t regions = delta > kMinLevelDistance ? m_.smooth_region_count : 1u;
       for (uint32_t r = 0; r < regions && r < kMaxSmoothRegions; ++r) {
         Aabb box;
@@ -115,8 +115,8 @@ class SurfaceTracer {
         box.hi += vec3(grow);
         float a, b;
         clip_to_box(frame_, box, a, b);
-        a = fmaxf(a, t_near_);
-        b = fminf(b, t_far_);
+        a = max_of(a, t_near_);
+        b = min_of(b, t_far_);
         if (!(a <= b)) continue;
         int i = march_count++;  // insertion by start
         for (; i > 0 && march[i - 1].a > a; --i) march[i] = march[i - 1];
@@ -125,7 +125,7 @@ class SurfaceTracer {
       int merged = 0;
       for (int i = 0; i < march_count; ++i) {
         if (merged > 0 && march[i].a <= march[merged - 1].b) {
-          march[merged - 1].b = fmaxf(march[merged - 1].b, march[i].b);
+          march[merged - 1].b = max_of(march[merged - 1].b, march[i].b);
         } else {
           march[merged++] = march[i];
         }
@@ -145,11 +145,11 @@ class SurfaceTracer {
     float t_start = sheets_ && box0 <= box1 ? box0 : kInfinity;
     t_end_ = sheets_ && box0 <= box1 ? box1 : -kInfinity;
     if (march_count > 0) {
-      t_start = fminf(t_start, march[0].a);
-      t_end_ = fmaxf(t_end_, march[march_count - 1].b);
+      t_start = min_of(t_start, march[0].a);
+      t_end_ = max_of(t_end_, march[march_count - 1].b);
     }
-    t_start = fmaxf(t_start, t_near_);
-    t_end_ = fminf(t_end_, t_far_);
+    t_start = max_of(t_start, t_near_);
+    t_end_ = min_of(t_end_, t_far_);
     if (!(t_start <= t_end_)) return hit_;
 
     // march[0] starts at or after t_start; the start lies in a region exactly when they meet.
@@ -168,7 +168,7 @@ class SurfaceTracer {
       have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, t_start, kEmptyLane, t_end_, next_);
     }
     for (int k = 0; k < march_count; ++k) {
-      const float a = fmaxf(march[k].a, t_start), b = fminf(march[k].b, t_end_);
+      const float a = max_of(march[k].a, t_start), b = min_of(march[k].b, t_end_);
       if (!(a <= b)) continue;
       if (sheets_ && walk_crossings_until(a)) return hit_;
       if (this->march(a, b)) return hit_;
@@ -235,7 +235,7 @@ class SurfaceTracer {
       const float phi = sample.phi, radius = sample.boundary_distance;
       const LevelBracket levels = bracket_levels(phi, phase_);
       const float gap_below = phi - levels.below, gap_above = levels.above - phi;
-      const float gap = fminf(gap_below, gap_above);
+      const float gap = min_of(gap_below, gap_above);
       // Two safe steps; either keeps φ off the levels, so the longer is taken (fmaxf also drops
       // the NaN of the second on ∂M itself).
       const float rho =
@@ -255,7 +255,7 @@ class SurfaceTracer {
         if (pending > 0 ? lifted >= pending_level : lifted <= pending_level) band_ += pending;
         pending = 0;
       }
-      gradient_wanted = gap <= eps_ * fminf(sample.gradient_bound, harnack_gradient_bound(radius, phi));
+      gradient_wanted = gap <= eps_ * min_of(sample.gradient_bound, harnack_gradient_bound(radius, phi));
       if (gradient_wanted) {
         if (!have_gradient) sample = sample_phase(m_, x, o_.beta, true, o_.exact);
         const vec3 g = sample.gradient;
@@ -273,7 +273,7 @@ class SurfaceTracer {
             pending = step;
             pending_level = at_above ? levels.above : levels.below;
             pending_phi = phi;
-            t += fminf(2.0f * gap / fabsf(rate) + eps_, 10.0f * eps_);
+            t += min_of(2.0f * gap / fabsf(rate) + eps_, 10.0f * eps_);
           } else {
             t += fmaxf(rho, eps_);  // moving away from the level (or grazing it): no crossing
           }
@@ -289,7 +289,7 @@ class SurfaceTracer {
       t_prev = t;
       rho_prev = safe;
       if (o_.overstep) {
-        t = fminf(t + kOverstepFactor * safe, t_end);
+        t = min_of(t + kOverstepFactor * safe, t_end);
         overstepped = true;
       } else {
         t += safe;
