@@ -160,6 +160,17 @@ Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of
   return cone;
 }
 
+std::vector<ConeSegment> cone_segments(const TriangleTree& cone) {
+  std::vector<ConeSegment> segments(cone.vertices.size() / 3);
+  for (size_t t = 0; t < segments.size(); ++t) {
+    const double length2 = glm::dot(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]),
+                                    dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
+    // The length rounded up: the bound it enters must not shrink.
+    segments[t] = {std::nextafter(float(std::sqrt(length2)), kInfinityF), float(1.0 / length2)};
+  }
+  return segments;
+}
+
 std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone) {
   std::vector<WideNodeLength> lengths(cone.bvh.nodes.size(), WideNodeLength{});
   // Bottom-up, in double (a long curve of short segments would lose its tail in float), and

@@ -71,6 +71,7 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   const Mesh cone = boundary_cone(model.boundary_, loop_of_segment, loop_count);
   model.cone_ = build_triangle_tree(cone, options.max_leaf_triangles);
   model.cone_lengths_ = gwnrt::cone_boundary_lengths(model.cone_);
+  model.cone_segments_ = gwnrt::cone_segments(model.cone_);
   model.smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
   double area = 0;
   for (const uvec3& t : model.mesh_.triangles) {
@@ -96,6 +97,7 @@ ModelView GwnModel::view() const {
   v.boundary = boundary_tree_.view();
   v.cone = cone_.view();
   v.cone_boundary_lengths = cone_lengths_.data();
+  v.cone_segments = cone_segments_.data();
   v.smooth_regions = smooth_regions_.data();
   v.smooth_region_count = uint32_t(smooth_regions_.size());
   v.bounds = bounds_;

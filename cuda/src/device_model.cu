@@ -34,6 +34,7 @@ struct DeviceModel::Buffers {
   DeviceTriangleTree triangles;
   DeviceTriangleTree cone;
   DeviceBuffer<WideNodeLength> cone_lengths;
+  DeviceBuffer<ConeSegment> cone_segments;
   DeviceBuffer<WideNode> segment_nodes;
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
@@ -70,13 +71,16 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
   const SegmentTree& st = model.boundary_tree();
   const std::span<const WideNodeLength> lengths = model.cone_boundary_lengths();
-  for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()), b->segment_nodes.upload(st.bvh.nodes),
+  const std::span<const ConeSegment> segments = model.cone_segments();
+  for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()),
+                   b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
                    b->endpoints.upload(st.endpoints),
                    b->segment_ids.upload(st.segment_ids),
                    b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
     if (!s.ok()) return s;
   v.smooth_regions = b->smooth_regions.get();
   v.cone_boundary_lengths = b->cone_lengths.get();
+  v.cone_segments = b->cone_segments.get();
   v.boundary.bvh.nodes = b->segment_nodes.get();
   v.boundary.endpoints = b->endpoints.get();
   v.boundary.segment_ids = b->segment_ids.get();

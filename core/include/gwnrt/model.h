@@ -49,7 +49,9 @@ std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_
 // of M and C agree on shared edges).
 Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count);
 
-// Per lane of the cone's tree, the length of ∂M below it (the edge 1 -> 2 of each cone triangle).
+// Per cone triangle (leaf order), the segment of ∂M it carries (its edge 1 -> 2); per lane of
+// the cone's tree, the length of ∂M below it.
+std::vector<ConeSegment> cone_segments(const TriangleTree& cone);
 std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone);
 
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
@@ -78,6 +80,7 @@ class GwnModel {
   SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
   const TriangleTree& cone_tree() const { return cone_; }
   std::span<const WideNodeLength> cone_boundary_lengths() const { return cone_lengths_; }
+  std::span<const ConeSegment> cone_segments() const { return cone_segments_; }
   std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
   const Aabb& bounds() const { return bounds_; }
   float surface_margin() const { return surface_margin_; }
@@ -91,6 +94,7 @@ class GwnModel {
   SegmentTree boundary_tree_;
   TriangleTree cone_;
   std::vector<WideNodeLength> cone_lengths_;
+  std::vector<ConeSegment> cone_segments_;
   std::vector<SmoothRegion> smooth_regions_;
   Aabb bounds_;
   float surface_margin_ = 0;

@@ -18,6 +18,13 @@ struct SmoothRegion {
   float spread = 0;
 };
 
+// The segment of ∂M that a cone triangle (apex, a, b) carries, a -> b: its length and
+// 1 / length², kept so that the tracer's bound (phase.h) spends no square root or division on them.
+struct ConeSegment {
+  float length = 0;
+  float inverse_length2 = 0;
+};
+
 inline constexpr uint32_t kMaxSmoothRegions = 16;  // loops are grouped beyond this
 
 struct ModelView {
@@ -30,6 +37,7 @@ struct ModelView {
   // Per node of the cone's tree: the length of ∂M below each lane (its triangles' edges 1 -> 2
   // are exactly the segments of ∂M), for the tracer's bound on |∇w| (phase.h).
   const WideNodeLength* cone_boundary_lengths = nullptr;
+  const ConeSegment* cone_segments = nullptr;  // per cone triangle, in leaf order
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M

@@ -47,6 +47,7 @@ template <bool WantGradient>
 struct PhaseSum {
   const TriangleTreeView& tree;
   const WideNodeLength* lengths;
+  const ConeSegment* segments;
   const vec3& x;
   FieldAccumulator<float> far_field;
   HalfAngleSum near_half_angles;
@@ -72,7 +73,7 @@ struct PhaseSum {
   dvec3 g0{0.0};
   double l0 = 0.0, last_l2 = 0.0;
 
-  GWNRT_HD void near(const vec3& apex, const vec3& a, const vec3& b) {
+  GWNRT_HD void near(uint32_t t, const vec3& apex, const vec3& a, const vec3& b) {
     const dvec3 xd(x);
     if (!(apex == last_apex)) {
       last_apex = apex;
@@ -89,13 +90,14 @@ struct PhaseSum {
     near_half_angles.add({float(tangent.numerator), float(tangent.denominator)});
     // The segment a -> b: its share of the bound, and its distance (float is plenty for both).
     const dvec3 e = g2 - g1;
-    const float c2 = float(glm::dot(c12, c12)), e2 = float(glm::dot(e, e));
-    integral += segment_inverse_square_integral(float(l1 * l2), float(d12), c2, sqrtf(e2));
+    const float c2 = float(glm::dot(c12, c12));
+    const ConeSegment segment = segments[t];
+    integral += segment_inverse_square_integral(float(l1 * l2), float(d12), c2, segment.length);
     // Without branches (which of the three is nearest varies from segment to segment): the
     // nearer endpoint, or the line when x projects inside the segment.
     const bool inside = glm::dot(g1, e) < 0.0 && glm::dot(g2, e) > 0.0;
     const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
-    const float dist2 = inside ? c2 / e2 : end2;
+    const float dist2 = inside ? c2 * segment.inverse_length2 : end2;
     nearest2 = dist2 < nearest2 ? dist2 : nearest2;
     // In double: the cone's long inner edges carry large Biot–Savart terms that cancel between
     // neighbours, and in float that cancellation bends normals above a flat cap by 1e-2.
@@ -106,7 +108,7 @@ struct PhaseSum {
 template <bool WantGradient>
 GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta, bool exact) {
   // The exact reference reads every triangle as near: the bound from each segment alone.
-  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, x, {}, {}, dvec3(0.0)};
+  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, dvec3(0.0)};
   visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
   PhaseSample out;
   float w;

@@ -50,7 +50,7 @@ inline constexpr float kLeafExpansionScale = 1.5f;
 // The multipole traversal shared by every evaluation of a triangle tree. A cluster whose ball
 // (centre p̄, radius r) has |x - p̄| > beta·r (leaves: kLeafExpansionScale·beta·r) is handed to
 // visitor.far(node, lane, d = p̄ - x); the triangles of nearer leaves to
-// visitor.near(p0, p1, p2); nearer inner clusters are opened.
+// visitor.near(t, p0, p1, p2), t its leaf-order index; nearer inner clusters are opened.
 template <class Visitor>
 GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, const vec3& x, float beta,
                                                 Visitor& visitor) {
@@ -79,7 +79,7 @@ GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, co
         continue;
       }
       for (uint32_t t = child; t < child + node.count[l]; ++t)
-        visitor.near(tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2]);
+        visitor.near(t, tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2]);
     }
   }
 }
@@ -103,7 +103,7 @@ struct TaylorSum {
   GWNRT_HD void far(uint32_t node, int lane, const vec3& d) {
     add_cluster_far_field<Order, WantGradient, WantHessian>(tree, node, lane, d, acc);
   }
-  GWNRT_HD void near(const vec3& p0, const vec3& p1, const vec3& p2) {
+  GWNRT_HD void near(uint32_t, const vec3& p0, const vec3& p1, const vec3& p2) {
     acc.omega += triangle_solid_angle(p0, p1, p2, x);
     if constexpr (WantHessian) {
       vec3 g;
