@@ -56,6 +56,26 @@ GWNRT_HD inline float gradient_bound_step(float radius, float gradient_bound, fl
   return 2.0f * radius / (2.0f + p + sqrtf(p * (4.0f + p)));
 }
 
+// The third safe step, of second order, for the last steps onto a level (where the first-order
+// steps above only shrink the gap by a constant factor each). Differentiating the Biot–Savart
+// field once more gives |∂²φ/∂t²| <= (1/4π)∮ 2|dl| / |l - y|³ <= 2K(y)/R(y), so on the ball of
+// radius θR around x the curvature is at most 2K / (R (1 - θ)³). With the previous sample Δ
+// behind (inside that ball), the secant slope bounds φ'(x) to within curvature·Δ/2, and φ(x + s)
+// to within a quadratic in s: the step it allows takes the gap down quadratically.
+inline constexpr float kCurvatureBallFraction = 0.25f;  // θ: both Δ and the step stay within θR
+
+GWNRT_HD inline float curvature_bound(float radius, float gradient_bound) {
+  constexpr float shrink = (1.0f - kCurvatureBallFraction) * (1.0f - kCurvatureBallFraction) *
+                           (1.0f - kCurvatureBallFraction);
+  return 2.0f * gradient_bound / (radius * shrink);
+}
+
+// The largest s >= 0 with slope·s + curvature·s²/2 <= gap (slope may be negative: moving away).
+GWNRT_HD inline float curvature_bound_step(float gap, float slope, float curvature) {
+  const float root = sqrtf(slope * slope + 2.0f * curvature * gap);
+  return slope >= 0.0f ? 2.0f * gap / (slope + root) : (root - slope) / curvature;
+}
+
 // Over-stepping (the paper's §3.1.4): try this multiple of the safe step; the longer step is
 // kept only when the safe balls of both of its ends cover it.
 inline constexpr float kOverstepFactor = 1.3f;

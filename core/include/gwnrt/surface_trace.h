@@ -220,6 +220,9 @@ class SurfaceTracer {
   GWNRT_HD bool march(float t, float t_end) {
     float t_prev = t, rho_prev = 0.0f;
     bool overstepped = false, gradient_wanted = false;
+    // The sample at t_prev, for the second-order step (kept only while nothing happened between).
+    bool have_prev = false;
+    float phi_prev = 0.0f, below_prev = 0.0f;
     int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
     float pending_level = 0.0f, pending_phi = 0.0f;
     for (;;) {
@@ -236,16 +239,28 @@ class SurfaceTracer {
       const LevelBracket levels = bracket_levels(phi, phase_);
       const float gap_below = phi - levels.below, gap_above = levels.above - phi;
       const float gap = min_of(gap_below, gap_above);
-      // Two safe steps; either keeps φ off the levels, so the longer is taken (fmaxf also drops
+      // Two safe balls; either keeps φ off the levels, so the larger is taken (fmaxf also drops
       // the NaN of the second on ∂M itself).
-      const float rho =
+      const float ball =
           fmaxf(angle_valued_step(radius, phi, levels), gradient_bound_step(radius, sample.gradient_bound, gap));
-      if (overstepped && t - t_prev > rho_prev + rho) {  // the long step was not covered
+      if (overstepped && t - t_prev > rho_prev + ball) {  // the long step was not covered
         t = t_prev + rho_prev;
         overstepped = false;
         continue;
       }
       overstepped = false;
+      // The second-order step looks ahead only (it leans on the sample behind).
+      float rho = ball;
+      const float delta = t - t_prev;
+      if (have_prev && delta > 0.0f && delta <= kCurvatureBallFraction * radius) {
+        const float lifted = phi - floorf(phi - below_prev);  // φ continued from φ_prev (no level between)
+        const float slope = (lifted - phi_prev) / delta;
+        const float curvature = curvature_bound(radius, sample.gradient_bound);
+        const float widen = 0.5f * curvature * delta;  // φ'(t) is the slope to within this
+        const float ahead = min_of(curvature_bound_step(gap_above, slope + widen, curvature),
+                                   curvature_bound_step(gap_below, widen - slope, curvature));
+        rho = fmaxf(rho, min_of(ahead, kCurvatureBallFraction * radius));
+      }
       // No level lies in (t_prev, t): the crossings there come first.
       if (sheets_ && walk_crossings_until(t)) return true;
       if (pending != 0) {
@@ -279,6 +294,7 @@ class SurfaceTracer {
           }
           t_prev = t;
           rho_prev = 0.0f;
+          have_prev = false;
           if (t > t_end) return false;
           continue;
         }
@@ -288,6 +304,9 @@ class SurfaceTracer {
       if (t + safe >= t_end) return false;
       t_prev = t;
       rho_prev = safe;
+      have_prev = pending == 0 && rho >= 0.5f * eps_;  // a certified step: φ is continued across it
+      phi_prev = phi;
+      below_prev = levels.below;
       if (o_.overstep) {
         t = min_of(t + kOverstepFactor * safe, t_end);
         overstepped = true;
