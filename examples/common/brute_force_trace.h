@@ -9,7 +9,7 @@
 //    φ is harmonic off ∂M, and a ball that meets no edge at all meets no part of ∂M, so R is a
 //    valid (pessimistic) Harnack radius; it does not need ∂M to be known.
 // The step, the level bracket, the gradient stopping test |gap| <= ε|∇w| and over-stepping are
-// harnack.h's (bracket_levels, angle_valued_step, harnack_gradient_bound, kOverstepFactor).
+// harnack.h's (bracket_levels, angle_valued_step, harnack_gradient_bound, kPaperOverstepFactor).
 // A smooth hit is a stop at the level of φ where w itself reaches `level` (not level ± k),
 // moving into the other side; other levels are stepped across as in the core.
 //
@@ -197,7 +197,7 @@ class BruteForceTracer {
       if (t + safe >= t1) {
         t = t1;  // the last piece: evaluate the end for the sheet test
       } else if (o.overstep) {
-        t = std::min(t + double(kOverstepFactor) * safe, t1);
+        t = std::min(t + double(kPaperOverstepFactor) * safe, t1);
         overstepped = true;
       } else {
         t += safe;

@@ -6,9 +6,11 @@
 // The ray is followed by two monotone walks, merged in t order:
 //  - the crossings of M, exact and in order (ray.h): each moves w by ±1; one that moves w across
 //    w* is a sheet hit;
-//  - Harnack steps on φ with R = distance to ∂M (harnack.h): every step is free of levels
-//    w* + k; where the march converges on a level that w itself crosses at w*, it is a smooth hit;
-//    other levels (w* ± 1, ...) are stepped across and move the band.
+//  - safe steps on φ (harnack.h: Harnack's with R = distance to ∂M, a Lipschitz step from the
+//    Biot–Savart bound on |∇w|, and a second-order step near a level, whichever is longest;
+//    phase.h evaluates what they need): every step is free of levels w* + k; where the march
+//    converges on a level that w itself crosses at w*, it is a smooth hit; other levels
+//    (w* ± 1, ...) are stepped across and move the band.
 // A closed mesh has no ∂M, so no Harnack steps: the trace is one walk over its crossings.
 #pragma once
 
