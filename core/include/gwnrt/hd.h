@@ -49,6 +49,11 @@ GWNRT_HD inline T sqr(T x) { return x * x; }
 GWNRT_HD GWNRT_FORCEINLINE float min_of(float a, float b) { return b < a ? b : a; }
 GWNRT_HD GWNRT_FORCEINLINE float max_of(float a, float b) { return a < b ? b : a; }
 
+// atan2 by the type of its arguments: an unqualified atan2 of floats finds C's double version on
+// the host (about twice the cost).
+GWNRT_HD GWNRT_FORCEINLINE float arctan2(float y, float x) { return atan2f(y, x); }
+GWNRT_HD GWNRT_FORCEINLINE double arctan2(double y, double x) { return atan2(y, x); }
+
 // The bits of a float and back, the same on the host and the device.
 GWNRT_HD inline uint32_t float_bits(float x) {
 #if defined(__CUDA_ARCH__)

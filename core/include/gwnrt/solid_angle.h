@@ -38,7 +38,7 @@ GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<
                                        const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
   const SolidAngleTangent<T> tangent = triangle_solid_angle_tangent(p0, p1, p2, x);
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
-  return T(2) * atan2(tangent.numerator, tangent.denominator);
+  return T(2) * arctan2(tangent.numerator, tangent.denominator);
 }
 
 // Σ atan2(numerator_i, denominator_i) modulo 2π, as the argument of the product of the complex
@@ -72,7 +72,7 @@ struct HalfAngleSum {
     }
   }
   GWNRT_HD float angle() const {  // in (-π, π]
-    return atan2f(re * other_im + im * other_re, re * other_re - im * other_im);
+    return arctan2(re * other_im + im * other_re, re * other_re - im * other_im);
   }
 };
 

@@ -100,9 +100,13 @@ class SurfaceTracer {
       float a, b;
     } march[kMaxSmoothRegions];
     int march_count = 0;
+    // Whether the march intervals are the smooth regions, on whose boundary |w_C| < δ still holds,
+    // and whether the ray's own start lies inside one of them.
+    bool proven_regions = false, origin_inside = false;
     if (smooth_) {
       const float delta = min_of(phase_, 1.0f - phase_);
-      const uint32_t regions = delta > kMinLevelDistance ? m_.smooth_region_count : 1u;
+      proven_regions = delta > kMinLevelDistance;
+      const uint32_t regions = proven_regions ? m_.smooth_region_count : 1u;
       for (uint32_t r = 0; r < regions && r < kMaxSmoothRegions; ++r) {
         Aabb box;
         float grow;
@@ -117,6 +121,7 @@ class SurfaceTracer {
         box.hi += vec3(grow);
         float a, b;
         clip_to_box(frame_, box, a, b);
+        origin_inside = origin_inside || (a < t_near_ && t_near_ <= b);
         a = max_of(a, t_near_);
         b = min_of(b, t_far_);
         if (!(a <= b)) continue;
@@ -154,8 +159,11 @@ class SurfaceTracer {
     t_end_ = min_of(t_end_, t_far_);
     if (!(t_start <= t_end_)) return hit_;
 
-    // march[0] starts at or after t_start; the start lies in a region exactly when they meet.
-    const bool start_in_region = march_count > 0 && march[0].a <= t_start;
+    // march[0] starts at or after t_start; the start lies in a region exactly when they meet. A
+    // ray from outside starts on a region's boundary, where the regions' bound still holds: w_C
+    // needs evaluating only at a start strictly inside.
+    const bool start_in_region =
+        march_count > 0 && (march[0].a < t_start || (march[0].a == t_start && (origin_inside || !proven_regions)));
     float w_start = 0.0f;
     if (start_in_region) w_start = cone_winding_number(m_.cone, point(t_start), o_);
     if (sheets_) {
@@ -164,7 +172,8 @@ class SurfaceTracer {
       const int crossed = box0 < t_start ? crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, box0, t_start) -
                                                crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, box0, t_start)
                                          : 0;
-      // Outside every region |w_C| < δ, so floor(w_C - w*) = -1 - floor(w*) without evaluating it.
+      // Outside every region (and on their boundary) |w_C| < δ, so floor(w_C - w*) = -1 - floor(w*)
+      // without evaluating it.
       band_ = start_in_region ? int(floorf(w_start + float(crossed) - o_.level))
                               : crossed - 1 - int(floorf(o_.level));
       have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, t_start, kEmptyLane, t_end_, next_);
