@@ -88,18 +88,6 @@ double distance_to_triangle(const Mesh& m, uint32_t t, const dvec3& x) {
   return glm::length(closest_point_on_triangle(a, b, c, x).point - x);
 }
 
-// Hexagon fan, slightly curved: centre raised by 0.15 above the unit rim, normals up.
-Mesh make_hexagon_fan() {
-  Mesh m;
-  m.positions.push_back({0.0f, 0.0f, 0.15f});
-  for (int k = 0; k < 6; ++k) {
-    const double a = 2.0 * kPi * k / 6.0;
-    m.positions.push_back({float(std::cos(a)), float(std::sin(a)), 0.0f});
-  }
-  for (uint32_t k = 0; k < 6; ++k) m.triangles.push_back({0u, 1 + k, 1 + (k + 1) % 6});
-  return m;
-}
-
 struct OpenCase {
   const char* name;
   size_t rays;
@@ -109,7 +97,7 @@ void PrintTo(const OpenCase& c, std::ostream* os) { *os << c.name << ", " << c.r
 Mesh open_mesh(const std::string& name) {
   if (name == "bunny_holes") return load_test_mesh("bunny_holes.obj");
   if (name == "open_cube") return test::make_cube(true);
-  return make_hexagon_fan();
+  return test::make_hexagon_fan();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -118,7 +106,7 @@ Mesh open_mesh(const std::string& name) {
 
 TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
   // w and ∇w against the library's double brute force and against central differences.
-  const Mesh fan = make_hexagon_fan();
+  const Mesh fan = test::make_hexagon_fan();
   const GwnModel model = build_model(fan);
   const ReferenceMesh ref = test::reference_mesh(fan);
   Random rng(91);

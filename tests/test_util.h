@@ -32,6 +32,18 @@ inline GwnModel build_model(Mesh mesh) {
   return model;
 }
 
+// Hexagon fan, slightly curved: centre raised by 0.15 above the unit rim, normals up.
+inline Mesh make_hexagon_fan() {
+  Mesh m;
+  m.positions.push_back({0.0f, 0.0f, 0.15f});
+  for (int k = 0; k < 6; ++k) {
+    const double a = 2.0 * kPi * k / 6.0;
+    m.positions.push_back({float(std::cos(a)), float(std::sin(a)), 0.0f});
+  }
+  for (uint32_t k = 0; k < 6; ++k) m.triangles.push_back({0u, 1 + k, 1 + (k + 1) % 6});
+  return m;
+}
+
 // Unit sphere by subdividing an icosahedron `levels` times, outward-oriented, vertices on the sphere.
 inline Mesh make_sphere(int levels, float radius = 1.0f) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
