@@ -20,6 +20,10 @@ struct TraceCase {
   TraceMode mode;
 };
 
+void PrintTo(const TraceCase& c, std::ostream* os) {
+  *os << c.mesh << (c.mode == TraceMode::kSolidAngle ? ", solid angle" : ", gwn");
+}
+
 class CudaTrace : public ::testing::TestWithParam<TraceCase> {
  protected:
   void SetUp() override {
