@@ -1266,5 +1266,129 @@ TEST(TraceFuzz, StepAndCrossingCapsEndRaysAsCapped) {
   EXPECT_EQ(uncapped_same, uncapped);
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// 8. Filters: trace_surface with an accept functor is offered every hit in increasing t and goes
+//    on past those it turns down (what the Embree plugin's intersection filters rest on).
+// ---------------------------------------------------------------------------------------------
+
+// Every crossing of the line with a triangle, by Möller–Trumbore in double, sorted by t; false
+// when one lies within `margin` (barycentric) of a triangle's edge, where float and double may
+// count it differently.
+bool all_crossings(const Mesh& m, const Ray& r, double margin, std::vector<double>& ts) {
+  ts.clear();
+  const dvec3 o(r.origin), d(r.direction);
+  for (const uvec3& tri : m.triangles) {
+    const dvec3 a(m.positions[tri[0]]), b(m.positions[tri[1]]), c(m.positions[tri[2]]);
+    const dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (det == 0) continue;
+    const dvec3 s = o - a;
+    const double u = glm::dot(s, p) / det;
+    const dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(d, q) / det, t = glm::dot(e2, q) / det;
+    if (u < -margin || v < -margin || u + v > 1 + margin) continue;
+    if (u < margin || v < margin || u + v > 1 - margin) return false;
+    if (t >= double(r.tnear) && t <= double(r.tfar)) ts.push_back(t);
+  }
+  std::sort(ts.begin(), ts.end());
+  return true;
+}
+
+TEST(TraceFilter, RejectingEveryHitVisitsEveryCrossingOfAClosedMesh) {
+  const Mesh mesh = load_test_mesh("bunny.obj");
+  const GwnModel model = build_model(mesh);
+  const ModelView view = model.view();
+  const Aabb box = model.bounds();
+  const double diag = box_diagonal(box);
+  Random rng(301);
+  size_t rays = 0, multi = 0;
+  for (int i = 0; i < 600; ++i) {
+    Ray r;
+    r.origin = rng.in_box(grown(box, 0.3f * float(diag)));
+    r.direction = (rng.in_box(box) - r.origin) * rng.scale();
+    std::vector<double> expected;
+    if (!all_crossings(mesh, r, 1e-6, expected)) continue;
+    std::vector<RayHit> offered;
+    const RayHit h = trace_surface(view, r, TraceOptions{}, [&](const RayHit& c) {
+      offered.push_back(c);
+      return false;
+    });
+    ++rays;
+    multi += expected.size() >= 2;
+    const bool inside = winding_number_exact(model.triangle_view(), r.origin).w > 0.5;
+    EXPECT_FALSE(h.hit);  // none accepted: a miss
+    ASSERT_EQ(offered.size(), expected.size()) << describe(r);
+    const double len = glm::length(dvec3(r.direction));
+    for (size_t k = 0; k < offered.size(); ++k) {
+      // Same tolerance as against Embree above: float round-off of one crossing.
+      EXPECT_LE(std::fabs(double(offered[k].t) - expected[k]) * len, 1e-5 * diag) << describe(r) << " hit " << k;
+      EXPECT_EQ(offered[k].kind, HitKind::kSheet);
+      // In and out of the solid in turn: the outward normal faces against the ray entering,
+      // along it leaving.
+      EXPECT_EQ(glm::dot(offered[k].normal, r.direction) < 0.0f, (k % 2 == 0) != inside) << describe(r) << " hit " << k;
+    }
+    // Accepting the k-th offer reports exactly it.
+    for (size_t k = 0; k < offered.size(); ++k) {
+      size_t seen = 0;
+      const RayHit hk = trace_surface(view, r, TraceOptions{}, [&](const RayHit&) { return seen++ == k; });
+      ASSERT_TRUE(hk.hit);
+      EXPECT_EQ(hk.t, offered[k].t);
+      EXPECT_EQ(hk.triangle, offered[k].triangle);
+    }
+  }
+  EXPECT_GT(rays, 500u);
+  EXPECT_GT(multi, rays / 3);
+}
+
+TEST(TraceFilter, RejectingTheFirstHitReportsTheSecondOnAnOpenMesh) {
+  const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));
+  const ModelView view = model.view();
+  const ReferenceMesh ref = test::reference_mesh(model.mesh());
+  const Aabb box = reference_box(model);
+  const double diag = box_diagonal(model.bounds());
+  const std::vector<Ray> rays = open_rays(model, 90, 302);
+  const TraceOptions options;
+  const double eps = double(options.epsilon) * diag;
+  // The reference's first two crossings; the second is the first of the ray resampled past the
+  // first (the dense sums in parallel: they are the slow part).
+  std::vector<ReferenceCrossing> firsts(rays.size()), seconds(rays.size());
+  tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
+    const test::ReferenceProfile profile = test::reference_profile(ref, rays[i], box, 1500);
+    firsts[i] = test::reference_crossing(ref, profile, 0.5);
+    if (!firsts[i].hit) return;
+    const double past = firsts[i].s + 1e-4 * diag;
+    seconds[i] = test::reference_crossing(ref, test::reference_profile_between(ref, rays[i], past, profile.s.back(), 1500), 0.5);
+  });
+  size_t compared = 0, smooth_first = 0, agree = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const Ray& r = rays[i];
+    const ReferenceCrossing &first = firsts[i], &second = seconds[i];
+    if (!first.hit || (!first.sheet && first.rate < 0.05)) continue;  // no hit, or a graze
+    if (second.hit && !second.sheet && second.rate < 0.05) continue;
+    bool first_offer = true;
+    const RayHit h = trace_surface(view, r, options, [&](const RayHit&) { return !std::exchange(first_offer, false); });
+    ++compared;
+    smooth_first += !first.sheet;
+    const double len = glm::length(dvec3(r.direction));
+    // Sheets to float round-off; smooth pieces to where the stopping test may end, as in §2.
+    auto tolerance = [&](const ReferenceCrossing& c) {
+      return c.sheet ? 1e-5 * diag : 2.0 * (kMultipoleTolerance.delta_w + eps * glm::length(c.gradient)) / c.rate + 1e-5 * diag;
+    };
+    EXPECT_EQ(h.hit, second.hit) << describe(r) << "\n" << describe(h);
+    if (h.hit && second.hit) {
+      EXPECT_LE(std::fabs(double(h.t) * len - second.s), tolerance(second)) << describe(r) << "\n" << describe(h);
+      EXPECT_EQ(h.kind == HitKind::kSheet, second.sheet) << describe(r);
+      agree += std::fabs(double(h.t) * len - second.s) <= tolerance(second);
+    } else {
+      agree += h.hit == second.hit;
+    }
+  }
+  std::printf("[ bunny_holes ] %zu rays compared (%zu with a smooth first hit), %zu agree\n", compared, smooth_first,
+              agree);
+  EXPECT_GT(compared, rays.size() / 3);
+  EXPECT_GT(smooth_first, 5u);
+}
+
 }  // namespace
 }  // namespace gwnrt

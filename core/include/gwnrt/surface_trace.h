@@ -62,6 +62,53 @@ inline constexpr float kMinLevelDistance = 1e-3f;
 inline constexpr float kBoxPad = 1e-4f;
 inline constexpr float kBoxPadAbsolute = 1e-30f;
 
+// Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
+// the box is rounded differently from the box clip and may fall just outside it.
+GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
+  Aabb padded = m.bounds;
+  const vec3 pad(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute);
+  padded.lo -= pad;
+  padded.hi += pad;
+  return padded;
+}
+
+// Where the march may be needed for level w*: the smooth regions grown for δ = the distance from
+// 0 to the nearest level (SmoothRegion), or, for levels at whole numbers, where that bound is
+// useless, M's box grown by surface_margin. No smooth piece of S lies outside these boxes.
+GWNRT_HD inline uint32_t march_box_count(const ModelView& m, float level) {
+  if (m.cone.triangle_count == 0) return 0;
+  const float phase = level - floorf(level);
+  const float delta = min_of(phase, 1.0f - phase);
+  if (!(delta > kMinLevelDistance)) return 1u;
+  return m.smooth_region_count < kMaxSmoothRegions ? m.smooth_region_count : kMaxSmoothRegions;
+}
+
+GWNRT_HD inline Aabb march_box(const ModelView& m, float level, uint32_t r) {
+  const float phase = level - floorf(level);
+  const float delta = min_of(phase, 1.0f - phase);
+  Aabb box;
+  float grow;
+  if (delta > kMinLevelDistance) {
+    box = m.smooth_regions[r].box;
+    grow = sqrtf(m.smooth_regions[r].spread / (4.0f * float(kPi) * delta));
+  } else {  // levels at whole numbers: only |w| <= A/(4π d²) of the whole mesh bounds them
+    box = m.bounds;
+    grow = m.surface_margin;
+  }
+  box.lo -= vec3(grow);
+  box.hi += vec3(grow);
+  return box;
+}
+
+// A box holding all of S for these options (what an Embree bounds callback reports): M's box for
+// the sheets, the march boxes for the smooth pieces. Empty (not valid()) when S is.
+GWNRT_HD inline Aabb surface_bounds(const ModelView& m, const TraceOptions& options) {
+  Aabb box;
+  if (options.mode == TraceMode::kWindingNumber) box.extend(crossing_box(m));
+  for (uint32_t r = 0; r < march_box_count(m, options.level); ++r) box.extend(march_box(m, options.level, r));
+  return box;
+}
+
 namespace detail {
 
 // w_C at x: where the march starts, the integer part of w comes from it (sample_phase has only
@@ -72,9 +119,13 @@ GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const ve
 
 GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
 
+// Accept: bool(const RayHit&), asked about every candidate hit in increasing t; the trace ends
+// at the first it accepts (an intersection filter turns candidates down).
+template <class Accept>
 class SurfaceTracer {
  public:
-  GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o) : m_(m), o_(o) {
+  GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o, Accept accept)
+      : m_(m), o_(o), accept_(accept) {
     const float len = float(glm::length(dvec3(ray.direction)));  // in float, |d|² under/overflows for finite d
     if (!finite3(ray.origin) || !finite3(ray.direction) || !(len > 0.0f) || !is_finite(len) || is_nan(ray.tnear) ||
         is_nan(ray.tfar)) {
@@ -106,19 +157,9 @@ class SurfaceTracer {
     if (smooth_) {
       const float delta = min_of(phase_, 1.0f - phase_);
       proven_regions = delta > kMinLevelDistance;
-      const uint32_t regions = proven_regions ? m_.smooth_region_count : 1u;
-      for (uint32_t r = 0; r < regions && r < kMaxSmoothRegions; ++r) {
-        Aabb box;
-        float grow;
-        if (delta > kMinLevelDistance) {
-          box = m_.smooth_regions[r].box;
-          grow = sqrtf(m_.smooth_regions[r].spread / (4.0f * float(kPi) * delta));
-        } else {  // levels at whole numbers: only |w| <= A/(4π d²) of the whole mesh bounds them
-          box = m_.bounds;
-          grow = m_.surface_margin;
-        }
-        box.lo -= vec3(grow);
-        box.hi += vec3(grow);
+      const uint32_t regions = march_box_count(m_, o_.level);
+      for (uint32_t r = 0; r < regions; ++r) {
+        const Aabb box = march_box(m_, o_.level, r);
         float a, b;
         clip_to_box(frame_, box, a, b);
         origin_inside = origin_inside || (a < t_near_ && t_near_ <= b);
@@ -139,16 +180,8 @@ class SurfaceTracer {
       }
       march_count = merged;
     }
-    // Crossings live in M's box; it is padded because the crossing of a triangle lying in a face
-    // of the box is rounded differently from the box clip and may fall just outside it.
     float box0 = kInfinity, box1 = -kInfinity;
-    if (sheets_) {
-      Aabb padded = m_.bounds;
-      const vec3 pad(kBoxPad * glm::length(m_.bounds.hi - m_.bounds.lo) + kBoxPadAbsolute);
-      padded.lo -= pad;
-      padded.hi += pad;
-      clip_to_box(frame_, padded, box0, box1);
-    }
+    if (sheets_) clip_to_box(frame_, crossing_box(m_), box0, box1);
     float t_start = sheets_ && box0 <= box1 ? box0 : kInfinity;
     t_end_ = sheets_ && box0 <= box1 ? box1 : -kInfinity;
     if (march_count > 0) {
@@ -191,13 +224,23 @@ class SurfaceTracer {
  private:
   GWNRT_HD vec3 point(float t) const { return frame_.origin + t * dir_; }
 
-  GWNRT_HD void report(float t, HitKind kind, const vec3& normal, uint32_t triangle) {
+  // A candidate hit for the caller's filter; true when it is accepted (the trace ends there),
+  // false when the trace is to go on past it.
+  GWNRT_HD bool offer(float t, HitKind kind, const vec3& normal, uint32_t triangle) {
     hit_.hit = true;
     hit_.kind = kind;
     hit_.t = t / len_;
     hit_.position = point(t);
     hit_.normal = normal;
     hit_.triangle = triangle;
+    if (accept_(static_cast<const RayHit&>(hit_))) return true;
+    hit_.hit = false;
+    hit_.kind = HitKind::kNone;
+    hit_.t = kInfinity;
+    hit_.position = vec3(0.0f);
+    hit_.normal = vec3(0.0f);
+    hit_.triangle = kEmptyLane;
+    return false;
   }
 
   // Applies the crossings with t <= t_limit in order; true when one of them is a sheet hit (or
@@ -218,8 +261,7 @@ class SurfaceTracer {
         // Entering {w > w*} the outside is behind the ray, leaving it the outside is ahead.
         const bool entering = band >= 0;
         if ((glm::dot(n, dir_) > 0.0f) == entering) n = -n;
-        report(next_.t, HitKind::kSheet, n, m_.triangles.triangle_ids[i]);
-        return true;
+        if (offer(next_.t, HitKind::kSheet, n, m_.triangles.triangle_ids[i])) return true;
       }
       band_ = band;
       have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, next_.t, next_.index, t_end_, next_);
@@ -291,11 +333,10 @@ class SurfaceTracer {
           const float rate = glm::dot(g, dir_);  // dw/dt
           if (at_above ? rate > 0.0f : rate < 0.0f) {
             const int step = at_above ? 1 : -1;
-            if (!sheets_ || (band_ < 0) != (band_ + step < 0)) {
-              report(t, HitKind::kSmooth, -g / gn, kEmptyLane);
+            if ((!sheets_ || (band_ < 0) != (band_ + step < 0)) && offer(t, HitKind::kSmooth, -g / gn, kEmptyLane))
               return true;
-            }
-            // A level of w other than w*: step across it and check on the far side.
+            // A level of w other than w* (or a hit the filter turned down): step across it and
+            // check on the far side.
             pending = step;
             pending_level = at_above ? levels.above : levels.below;
             pending_phi = phi;
@@ -329,6 +370,7 @@ class SurfaceTracer {
 
   const ModelView& m_;
   const TraceOptions& o_;
+  Accept accept_;
   RayHit hit_;
   RayFrame frame_{};
   vec3 dir_{0.0f};
@@ -341,8 +383,23 @@ class SurfaceTracer {
 
 }  // namespace detail
 
+namespace detail {
+struct AcceptFirst {
+  GWNRT_HD bool operator()(const RayHit&) const { return true; }
+};
+}  // namespace detail
+
+// The first hit of the ray on S within [tnear, tfar].
 GWNRT_HD inline RayHit trace_surface(const ModelView& model, const Ray& ray, const TraceOptions& options) {
-  return detail::SurfaceTracer(model, ray, options).run();
+  return detail::SurfaceTracer<detail::AcceptFirst>(model, ray, options, {}).run();
+}
+
+// The first hit that `accept` (bool(const RayHit&)) accepts: it is offered the hits in increasing
+// t and the trace goes on past those it turns down (an intersection filter). A hit turned down
+// is not reported; a miss means none was accepted.
+template <class Accept>
+GWNRT_HD RayHit trace_surface(const ModelView& model, const Ray& ray, const TraceOptions& options, Accept accept) {
+  return detail::SurfaceTracer<Accept>(model, ray, options, accept).run();
 }
 
 }  // namespace gwnrt
