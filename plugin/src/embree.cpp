@@ -82,8 +82,9 @@ void barycentrics(const GwnModel& model, const RayHit& h, float& u, float& v) {
   v = c.v;
 }
 
+template <class Arguments>
 void write_hit(RTCHitN* hit, unsigned n, unsigned i, const RayHit& h, const GeometryRecord& record, unsigned geom_id,
-               const embree_api::IntersectArguments* args) {
+               const Arguments* args) {
   RTCHitN_Ng_x(hit, n, i) = h.normal.x;
   RTCHitN_Ng_y(hit, n, i) = h.normal.y;
   RTCHitN_Ng_z(hit, n, i) = h.normal.z;
@@ -94,7 +95,7 @@ void write_hit(RTCHitN* hit, unsigned n, unsigned i, const RayHit& h, const Geom
   RTCHitN_primID(hit, n, i) = primitive_of(h);
   RTCHitN_geomID(hit, n, i) = geom_id;
   for (unsigned l = 0; l < embree_api::kInstanceLevels; ++l)
-    RTCHitN_instID(hit, n, i, l) = args ? embree_api::instance_id(args, l) : RTC_INVALID_GEOMETRY_ID;
+    RTCHitN_instID(hit, n, i, l) = embree_api::instance_id(args, l);
 }
 
 void copy_hit_lane(RTCHitN* to, RTCHitN* from, unsigned n, unsigned i) {
@@ -168,7 +169,7 @@ void occluded_callback(const RTCOccludedFunctionNArguments* args) {
     // Any accepted hit occludes: the trace stops at the first one.
     trace_surface(record->mesh->view, lane.ray(), record->options, [&](const RayHit& h) {
       if (!(h.t > tnear && h.t < lane.tfar())) return false;
-      write_hit(potential.hit(), n, i, h, *record, args->geomID, nullptr);
+      write_hit(potential.hit(), n, i, h, *record, args->geomID, args);
       occluded = filter_accepts(args, lane, potential.hit(), h.t);
       return occluded;
     });
@@ -271,6 +272,9 @@ RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOption
   rtcSetGeometryUserPrimitiveCount(geometry, 1);
   rtcSetGeometryUserData(geometry, record);
   embree_api::set_callbacks(geometry, bounds_callback, intersect_callback, occluded_callback);
+  // Committed, so that it can be attached as it is; an application that changes it later (mask,
+  // filters) commits it again, as any Embree geometry.
+  rtcCommitGeometry(geometry);
   return geometry;
 }
 

@@ -14,7 +14,10 @@ using OccludedArguments = RTCOccludedFunctionNArguments;
 using FilterArguments = RTCFilterFunctionNArguments;
 
 // The instance IDs of the instances the ray is inside of, for the hit's instID.
-inline unsigned int instance_id(const IntersectArguments* args, unsigned level) { return args->context->instID[level]; }
+template <class Arguments>
+unsigned int instance_id(const Arguments* args, unsigned level) {
+  return args->context->instID[level];
+}
 inline constexpr unsigned kInstanceLevels = RTC_MAX_INSTANCE_LEVEL_COUNT;
 
 inline FilterArguments filter_arguments(const IntersectArguments* args, int* valid, RTCHitN* hit) {

@@ -60,6 +60,10 @@ inline constexpr float kMinLevelDistance = 1e-3f;
 // Padding of M's box for the crossing walk, relative to its diagonal (plus an absolute floor for
 // flat meshes): far above float round-off of the crossing and clip computations.
 inline constexpr float kBoxPad = 1e-4f;
+
+// How far past a level round-off may carry a safe step, in φ: far above float ulps of φ, far
+// below the change of φ over the stopping distance.
+inline constexpr float kPhaseRoundOff = 1e-5f;
 inline constexpr float kBoxPadAbsolute = 1e-30f;
 
 // Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
@@ -273,11 +277,13 @@ class SurfaceTracer {
   GWNRT_HD bool march(float t, float t_end) {
     float t_prev = t, rho_prev = 0.0f;
     bool overstepped = false, gradient_wanted = false;
-    // The sample at t_prev, for the second-order step (kept only while nothing happened between).
-    bool have_prev = false;
+    // The previous sample (at t_prev), and whether the step from it was safe. φ is continued from
+    // it to find the levels crossed since: none after a safe step, except when round-off carried
+    // the step a few ulps past the level it stopped short of (found here, not lost); the level
+    // after a deliberate jump across it (pending: +1 up, -1 down, already handled).
+    bool have_prev = false, certified = false;
     float phi_prev = 0.0f, below_prev = 0.0f;
-    int pending = 0;     // a level stepped across on purpose: +1 up, -1 down, 0 none
-    float pending_level = 0.0f, pending_phi = 0.0f;
+    int pending = 0;
     for (;;) {
       if (hit_.steps >= o_.max_steps) {
         hit_.capped = true;
@@ -287,7 +293,7 @@ class SurfaceTracer {
       const vec3 x = point(t);
       // Near ∂M the stopping test needs ∇w at almost every step; then it comes with φ.
       PhaseSample sample = sample_phase(m_, x, o_.beta, gradient_wanted, o_.exact);
-      const bool have_gradient = gradient_wanted;
+      bool have_gradient = gradient_wanted;
       const float phi = sample.phi, radius = sample.boundary_distance;
       const LevelBracket levels = bracket_levels(phi, phase_);
       const float gap_below = phi - levels.below, gap_above = levels.above - phi;
@@ -302,26 +308,44 @@ class SurfaceTracer {
         continue;
       }
       overstepped = false;
+      // No level lies in (t_prev, t): the crossings there come first.
+      if (sheets_ && walk_crossings_until(t)) return true;
+      int crossed = 0;
+      float lifted = phi;  // φ continued from φ_prev
+      if (have_prev) {
+        float d = phi - phi_prev;
+        d -= floorf(d + 0.5f);
+        lifted = phi_prev + d;  // the nearest continuation: right for small changes
+        if (certified) {
+          // A safe step may change φ by almost a whole period: then the continuation is the one
+          // inside φ_prev's bracket, unless the nearest one is only round-off past its end.
+          const float over = max_of(below_prev - lifted, lifted - (below_prev + 1.0f));
+          if (!(over >= 0.0f && over <= kPhaseRoundOff)) lifted = phi - floorf(phi - below_prev);
+        }
+        crossed = int(floorf(lifted - phase_)) - int(floorf(phi_prev - phase_));
+      }
+      if (crossed != 0) {
+        const int step = crossed > 0 ? 1 : -1;
+        if (step != pending && (!sheets_ || (band_ < 0) != (band_ + step < 0))) {
+          // w* itself, crossed by round-off: the hit is here (φ is within a few ulps of it).
+          if (!have_gradient) sample = sample_phase(m_, x, o_.beta, true, o_.exact);
+          have_gradient = true;
+          const float gn = glm::length(sample.gradient);
+          if (gn > 0.0f && offer(t, HitKind::kSmooth, -sample.gradient / gn, kEmptyLane)) return true;
+        }
+        band_ += step;
+      }
+      pending = 0;
       // The second-order step looks ahead only (it leans on the sample behind).
       float rho = ball;
       const float delta = t - t_prev;
-      if (have_prev && delta > 0.0f && delta <= kCurvatureBallFraction * radius) {
-        const float lifted = phi - floorf(phi - below_prev);  // φ continued from φ_prev (no level between)
+      if (crossed == 0 && have_prev && certified && delta > 0.0f && delta <= kCurvatureBallFraction * radius) {
         const float slope = (lifted - phi_prev) / delta;
         const float curvature = curvature_bound(radius, sample.gradient_bound);
         const float widen = 0.5f * curvature * delta;  // φ'(t) is the slope to within this
         const float ahead = min_of(curvature_bound_step(gap_above, slope + widen, curvature),
                                    curvature_bound_step(gap_below, widen - slope, curvature));
         rho = fmaxf(rho, min_of(ahead, kCurvatureBallFraction * radius));
-      }
-      // No level lies in (t_prev, t): the crossings there come first.
-      if (sheets_ && walk_crossings_until(t)) return true;
-      if (pending != 0) {
-        float d = phi - pending_phi;
-        d -= floorf(d + 0.5f);  // the change since the level, unwrapped (it is small)
-        const float lifted = pending_phi + d;
-        if (pending > 0 ? lifted >= pending_level : lifted <= pending_level) band_ += pending;
-        pending = 0;
       }
       gradient_wanted = gap <= eps_ * min_of(sample.gradient_bound, harnack_gradient_bound(radius, phi));
       if (gradient_wanted) {
@@ -338,15 +362,16 @@ class SurfaceTracer {
             // A level of w other than w* (or a hit the filter turned down): step across it and
             // check on the far side.
             pending = step;
-            pending_level = at_above ? levels.above : levels.below;
-            pending_phi = phi;
             t += min_of(2.0f * gap / fabsf(rate) + eps_, 10.0f * eps_);
           } else {
             t += fmaxf(rho, eps_);  // moving away from the level (or grazing it): no crossing
           }
           t_prev = t;
           rho_prev = 0.0f;
-          have_prev = false;
+          have_prev = true;  // a jump, not a safe step
+          certified = false;
+          phi_prev = phi;
+          below_prev = levels.below;
           if (t > t_end) return false;
           continue;
         }
@@ -356,7 +381,8 @@ class SurfaceTracer {
       if (t + safe >= t_end) return false;
       t_prev = t;
       rho_prev = safe;
-      have_prev = pending == 0 && rho >= 0.5f * eps_;  // a certified step: φ is continued across it
+      have_prev = true;
+      certified = rho >= 0.5f * eps_;  // a safe step (over-stepping keeps it safe or goes back)
       phi_prev = phi;
       below_prev = levels.below;
       if (o_.overstep) {

@@ -63,8 +63,9 @@ void gwnrtReleaseMesh(GWNRTMesh mesh);
 void gwnrtInitOptions(GWNRTOptions* options);
 
 /* A new Embree user geometry tracing S of `mesh` (retained) with `options` (copied; NULL for the
- * defaults). The application owns the returned reference, as with rtcNewGeometry. NULL on
- * failure (bad options, NULL mesh or device). */
+ * defaults), already committed. The application owns the returned reference, as with
+ * rtcNewGeometry; after changing it (rtcSetGeometryMask, filter functions) it commits it again,
+ * as any Embree geometry. NULL on failure (bad options, NULL mesh or device). */
 RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOptions* options);
 
 /* Why the last failing call on this thread failed ("" when none has). */
