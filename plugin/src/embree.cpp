@@ -3,6 +3,8 @@
 
 #include <atomic>
 #include <cstring>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -22,6 +24,8 @@ namespace {
 
 using namespace gwnrt;
 
+static_assert(sizeof(GWNRTMode) == sizeof(int), "GWNRTOptions::mode is read as an int");
+
 thread_local std::string g_last_error;
 
 void set_error(std::string message) { g_last_error = std::move(message); }
@@ -38,11 +42,33 @@ GWNRTMesh build(Mesh mesh, const std::string& source) {
 }
 
 // The user data of one geometry. Embree 3 tells a user geometry nothing when it is destroyed, so
-// a record (and its reference to the mesh) is never freed: see gwnrtNewGeometry.
+// a record (and its reference to the mesh) cannot be freed with it: records are kept until the
+// process ends, when the registry gives them back (so that leak checkers see nothing left).
 struct GeometryRecord {
   GWNRTMesh mesh;
   TraceOptions options;
   Aabb bounds;
+};
+
+class RecordRegistry {
+ public:
+  static GeometryRecord* add(GeometryRecord record) {
+    RecordRegistry& r = instance();
+    std::lock_guard<std::mutex> lock(r.mutex_);
+    r.records_.push_back(std::make_unique<GeometryRecord>(record));
+    return r.records_.back().get();
+  }
+  ~RecordRegistry() {
+    for (const auto& record : records_) gwnrtReleaseMesh(record->mesh);
+  }
+
+ private:
+  static RecordRegistry& instance() {
+    static RecordRegistry registry;
+    return registry;
+  }
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<GeometryRecord>> records_;
 };
 
 // Rays come as N-wide SoA packets (N = 1, 4, 8 or 16); lanes are read and written by index.
@@ -249,7 +275,11 @@ RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOption
   GWNRTOptions o;
   gwnrtInitOptions(&o);
   if (options) {
-    if (options->mode != GWNRT_MODE_GWN && options->mode != GWNRT_MODE_SOLID_ANGLE) {
+    // Read as the integer it is: a C caller may pass any int, and loading an out-of-range
+    // value as the enum would be undefined in C++.
+    int mode;
+    std::memcpy(&mode, &options->mode, sizeof mode);
+    if (mode != GWNRT_MODE_GWN && mode != GWNRT_MODE_SOLID_ANGLE) {
       set_error("gwnrtNewGeometry: mode must be GWNRT_MODE_GWN or GWNRT_MODE_SOLID_ANGLE");
       return nullptr;
     }
@@ -268,7 +298,7 @@ RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOption
   gwnrtRetainMesh(mesh);
   Aabb bounds = surface_bounds(mesh->view, trace);
   if (!bounds.valid()) bounds = mesh->model.bounds();  // S is empty: any box will do
-  auto* record = new GeometryRecord{mesh, trace, bounds};
+  GeometryRecord* record = RecordRegistry::add({mesh, trace, bounds});
   rtcSetGeometryUserPrimitiveCount(geometry, 1);
   rtcSetGeometryUserData(geometry, record);
   embree_api::set_callbacks(geometry, bounds_callback, intersect_callback, occluded_callback);
