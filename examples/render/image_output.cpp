@@ -98,4 +98,18 @@ Status write_image(const std::string& path, const Image& image, const std::strin
   return Status::Ok();
 }
 
+Image tone_mapped(const Image& image) {
+  Image out(image.width(), image.height(), {"R", "G", "B"});
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      const float* p = image.pixel(x, y);
+      float* q = out.pixel(x, y);
+      for (int c = 0; c < 3; ++c) {
+        const float v = p[c] > 0.0f ? p[c] : 0.0f;
+        q[c] = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
+      }
+    }
+  return out;
+}
+
 }  // namespace gwnrt::render

@@ -28,4 +28,9 @@ const char* supported_image_extensions();
 // command line that made it, say). Fails with OpenImageIO's own message.
 Status write_image(const std::string& path, const Image& image, const std::string& description = {});
 
+// A high-dynamic-range render made displayable: the first three channels through a filmic curve
+// (Narkowicz's fit of the ACES response) that maps [0, ∞) onto [0, 1) and keeps mid-tones, for
+// PNG; the other channels are dropped.
+Image tone_mapped(const Image& image);
+
 }  // namespace gwnrt::render

@@ -1,8 +1,14 @@
-// gwnrt-render: render the surface S = ∂{w > level} of a triangle mesh (or a level set of its
-// solid angle) with a pinhole camera that frames the mesh, one Harnack-traced ray per pixel,
-// shaded by normal or by a headlight, to PNG or EXR. Prints rays/s and the mean cost per ray.
+// gwnrt-render: an offline path tracer on Embree whose scenes hold GWN objects (the surface
+// S = ∂{w > level} of a mesh, through the gwnrt Embree plugin) beside ordinary triangle meshes.
+//   gwnrt-render SCENE.json        renders a scene file (scene.h documents the format)
+//   gwnrt-render MESH              renders the default scene: the mesh as a GWN object on a
+//                                  ground plane under a sky and a sun
+// Output: PNG (tone-mapped sRGB) or EXR (linear; --aovs adds albedo, normal, depth).
+// --integrator first-hit keeps the first version: one Harnack-traced ray per pixel, shaded by
+// normal or headlight, with its statistics image.
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +23,9 @@
 #include <tbb/global_control.h>
 
 #include "camera.h"
+#include "path_tracer.h"
+#include "render_scene.h"
+#include "scene.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
@@ -80,17 +89,83 @@ std::string command_line(int argc, char** argv) {
   return line;
 }
 
+struct PathOptions {
+  std::string input, output;
+  int width, height;
+  bool set_width, set_height;
+  int spp, max_depth;
+  int64_t seed;
+  bool aovs;
+  int threads;
+};
+
+int run_path_tracer(PathOptions o, const std::string& description) {
+  namespace render = gwnrt::render;
+  if (o.spp < 0 || o.max_depth < 0) return fail("--spp and --max-depth must be at least 1");
+  const bool default_output = o.output.empty();
+  if (default_output) o.output = (fs::path("out") / fs::path(o.input).stem()).string() + ".png";
+  if (auto why = check_output_path("-o", o.output, default_output)) return fail(*why);
+  if (o.aovs && render::image_format_for(o.output) != ImageFormat::kExr) return fail("--aovs needs an .exr output");
+  std::optional<tbb::global_control> thread_limit;
+  if (o.threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
+  const size_t thread_count = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+
+  render::SceneDesc scene;
+  const bool is_scene = fs::path(o.input).extension() == ".json";
+  if (gwnrt::Status s = is_scene ? render::load_scene(o.input, scene) : render::default_scene(o.input, scene); !s.ok())
+    return fail(s.message());
+  if (o.set_width || !is_scene) scene.camera.width = o.width;
+  if (o.set_height || !is_scene) scene.camera.height = o.height;
+  if (o.spp > 0) scene.render.spp = o.spp;
+  if (o.max_depth > 0) scene.render.max_depth = o.max_depth;
+  if (o.seed >= 0) scene.render.seed = uint64_t(o.seed);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  render::RenderScene rs;
+  if (gwnrt::Status s = rs.build(scene); !s.ok()) return fail(s.message());
+  std::printf("%s: %s: %zu triangle meshes, %zu GWN objects; scene built in %.3f s\n", kProgram, o.input.c_str(),
+              scene.meshes.size(), scene.gwn_objects.size(), gwnrt::examples::seconds_since(t0));
+  std::fflush(stdout);
+
+  render::PathSettings settings;
+  settings.spp = scene.render.spp;
+  settings.max_depth = scene.render.max_depth;
+  settings.seed = scene.render.seed;
+  settings.aovs = o.aovs;
+  std::atomic<size_t> progress{0};
+  render::PathRender result;
+  {
+    gwnrt::examples::ProgressBar bar(progress, size_t(scene.camera.width) * size_t(scene.camera.height), "px");
+    result = render::render_paths(rs, settings, &progress);
+  }
+  const double pixels = double(scene.camera.width) * double(scene.camera.height);
+  std::printf("%s: %dx%d, %d spp in %.2f s on %s: %.3f us per sample per pixel (%s samples/s)\n", kProgram,
+              scene.camera.width, scene.camera.height, settings.spp, result.seconds,
+              count_of(thread_count, "thread").c_str(), 1e6 * result.seconds / (pixels * settings.spp),
+              gwnrt::examples::human_count(double(result.samples) / result.seconds).c_str());
+  const bool png = render::image_format_for(o.output) == ImageFormat::kPng;
+  if (gwnrt::Status s = render::write_image(o.output, png ? render::tone_mapped(result.image) : result.image, description);
+      !s.ok())
+    return fail(s.message());
+  std::printf("%s: wrote %s\n", kProgram, o.output.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Render the generalized-winding-number surface S = boundary of {w > level} of a triangle mesh "
-               "(OBJ/PLY) with Harnack tracing: a pinhole camera framing the mesh, one ray per pixel, "
-               "to PNG (sRGB) or EXR (linear).",
+  CLI::App app{"Path-trace a scene whose GWN objects (the surface S = boundary of {w > level} of a mesh) sit "
+               "beside ordinary triangle meshes in Embree, from a JSON scene file or, given a mesh, a default "
+               "scene; to PNG (sRGB) or EXR (linear).",
                kProgram};
 
   std::string mesh_path;
   std::string output_path;
+  std::string integrator = "path";
   int width = 800, height = 600;
+  int spp = 0, max_depth = 0;
+  int64_t seed = -1;
+  bool aovs = false;
   std::string shading_name = "headlight";
   double azimuth = 30.0, elevation = 20.0, fov = 40.0;
   std::string mode_name = "gwn";
@@ -102,11 +177,24 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::string stats_path;
 
-  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
+  app.add_option("input", mesh_path, "Scene file (.json) or triangle mesh (.obj or .ply)")->required();
+  app.add_option("--integrator", integrator,
+                 "path: path tracing on Embree (scene file or default scene); first-hit: one traced ray per "
+                 "pixel on the mesh's S, shaded directly")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"path", "first-hit"}));
+  app.add_option("--spp", spp, "Path tracing: samples per pixel (default: the scene's, 16 for a mesh)")->type_name("N");
+  app.add_option("--max-depth", max_depth, "Path tracing: bounces per path (default: the scene's, 8)")->type_name("N");
+  app.add_option("--seed", seed, "Path tracing: random seed (same seed, same image)")->type_name("S");
+  app.add_flag("--aovs", aovs, "Path tracing: also write albedo, normal and depth channels (EXR only)");
   app.add_option("-o,--output", output_path, "Image to write, .png or .exr (default: out/<mesh stem>.png)")
       ->type_name("FILE");
-  app.add_option("--width", width, "Image width in pixels")->type_name("W")->capture_default_str();
-  app.add_option("--height", height, "Image height in pixels")->type_name("H")->capture_default_str();
+  app.add_option("--width", width, "Image width in pixels (path tracing: overrides the scene's)")
+      ->type_name("W")
+      ->capture_default_str();
+  app.add_option("--height", height, "Image height in pixels (path tracing: overrides the scene's)")
+      ->type_name("H")
+      ->capture_default_str();
   app.add_option("--shading", shading_name,
                  "normal: outward normal as colour; headlight: diffuse light from the eye, smooth pieces "
                  "(filled holes) bluish")
@@ -171,6 +259,13 @@ int main(int argc, char** argv) {
     return fail("--max-steps must lie in [1, " + std::to_string(UINT32_MAX) + "], got " + std::to_string(max_steps));
   }
   if (app.count("--threads") && threads < 1) return fail("--threads must be at least 1");
+
+  if (integrator == "path") {
+    PathOptions po{mesh_path, output_path, width, height, app.count("--width") > 0, app.count("--height") > 0,
+                   spp, max_depth, seed, aovs, threads};
+    return run_path_tracer(po, command_line(argc, argv));
+  }
+  if (fs::path(mesh_path).extension() == ".json") return fail("--integrator first-hit renders a mesh, not a scene file");
 
   gwnrt::TraceOptions trace = defaults;
   gwnrt::examples::set_trace_surface(mode_name, level, trace);

@@ -1,0 +1,171 @@
+#include "render_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gwnrt::render {
+namespace {
+
+// Embree reports errors through a callback; the scene builder checks rtcGetDeviceError instead.
+Status embree_status(RTCDevice device, const std::string& what) {
+  const RTCError e = rtcGetDeviceError(device);
+  if (e == RTC_ERROR_NONE) return Status::Ok();
+  return {StatusCode::kInternal, what + ": Embree error " + std::to_string(int(e))};
+}
+
+RTCGeometry triangle_geometry(RTCDevice device, const Mesh& mesh) {
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                           3 * sizeof(unsigned), mesh.triangles.size()));
+  for (size_t i = 0; i < mesh.triangles.size(); ++i)
+    for (int k = 0; k < 3; ++k) t[3 * i + k] = mesh.triangles[i][k];
+  rtcCommitGeometry(g);
+  return g;
+}
+
+RTCRayHit make_rayhit(const vec3& o, const vec3& d, float tnear, float tfar) {
+  RTCRayHit rh;
+  rh.ray.org_x = o.x;
+  rh.ray.org_y = o.y;
+  rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x;
+  rh.ray.dir_y = d.y;
+  rh.ray.dir_z = d.z;
+  rh.ray.tnear = tnear;
+  rh.ray.tfar = tfar;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
+}  // namespace
+
+RenderScene::~RenderScene() {
+  if (scene_) rtcReleaseScene(scene_);
+  for (RTCScene s : object_scenes_) rtcReleaseScene(s);
+  for (GWNRTMesh m : gwn_meshes_) gwnrtReleaseMesh(m);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+Status RenderScene::build(const SceneDesc& desc) {
+  desc_ = &desc;
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) return {StatusCode::kUnavailable, "Embree: cannot create a device"};
+  scene_ = rtcNewScene(device_);
+  for (const MeshDesc& m : desc.meshes) {
+    if (m.mesh.triangles.empty()) continue;
+    for (const uvec3& t : m.mesh.triangles)
+      if (t.x >= m.mesh.positions.size() || t.y >= m.mesh.positions.size() || t.z >= m.mesh.positions.size())
+        return {StatusCode::kInvalidMesh, m.source + ": a triangle index is out of range"};
+    RTCGeometry g = triangle_geometry(device_, m.mesh);
+    const unsigned id = rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+    if (top_.size() <= id) top_.resize(id + 1);
+    top_[id] = {false, m.material, &m.mesh, glm::mat3(1.0f)};
+    // An emissive mesh is an area light.
+    const Material& mat = desc.materials[size_t(m.material)];
+    if (mat.kind == MaterialKind::kEmissive) {
+      for (const uvec3& t : m.mesh.triangles) {
+        const vec3 a = m.mesh.positions[t.x], b = m.mesh.positions[t.y], c = m.mesh.positions[t.z];
+        const float area = 0.5f * glm::length(glm::cross(b - a, c - a));
+        if (!(area > 0.0f)) continue;
+        lights_.vertices.insert(lights_.vertices.end(), {a, b, c});
+        lights_.emission.push_back(mat.emission);
+        lights_.total_area += area;
+        lights_.cdf.push_back(lights_.total_area);
+      }
+    }
+  }
+  for (float& c : lights_.cdf) c /= lights_.total_area;
+  if (!lights_.cdf.empty()) lights_.cdf.back() = 1.0f;
+
+  for (const GwnObjectDesc& g : desc.gwn_objects) {
+    GWNRTMesh mesh = gwnrtNewMesh(&g.mesh.positions[0].x, g.mesh.positions.size(), &g.mesh.triangles[0].x,
+                                  g.mesh.triangles.size());
+    if (!mesh) return {StatusCode::kInvalidMesh, g.source + ": " + gwnrtGetLastError()};
+    gwn_meshes_.push_back(mesh);
+    GWNRTOptions options;
+    gwnrtInitOptions(&options);
+    options.mode = g.options.mode == TraceMode::kSolidAngle ? GWNRT_MODE_SOLID_ANGLE : GWNRT_MODE_GWN;
+    options.level = g.options.level;
+    options.epsilon = g.options.epsilon;
+    options.max_steps = g.options.max_steps;
+    options.max_crossings = g.options.max_crossings;
+    options.beta = g.options.beta;
+    RTCGeometry geometry = gwnrtNewGeometry(device_, mesh, &options);
+    if (!geometry) return {StatusCode::kInvalidArgument, g.source + ": " + gwnrtGetLastError()};
+    RTCScene object = rtcNewScene(device_);
+    rtcAttachGeometry(object, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(object);
+    object_scenes_.push_back(object);
+    for (const glm::mat4& transform : g.instances) {
+      RTCGeometry instance = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(instance, object);
+      rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &transform[0][0]);
+      rtcCommitGeometry(instance);
+      const unsigned id = rtcAttachGeometry(scene_, instance);
+      rtcReleaseGeometry(instance);
+      if (top_.size() <= id) top_.resize(id + 1);
+      top_[id] = {true, g.material, nullptr, glm::transpose(glm::inverse(glm::mat3(transform)))};
+    }
+  }
+  rtcCommitScene(scene_);
+  if (Status s = embree_status(device_, "building the scene"); !s.ok()) return s;
+
+  if (desc.environment.file.empty()) {
+    environment_ = Environment::constant(desc.environment.radiance);
+  } else if (Status s = Environment::load(desc.environment.file, desc.environment.scale, environment_); !s.ok()) {
+    return s;
+  }
+  const Aabb box = scene_bounds(desc);
+  radius_ = box.valid() ? 0.5f * glm::length(box.hi - box.lo) : 1.0f;
+  return Status::Ok();
+}
+
+bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfar, SurfaceHit& hit) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh = make_rayhit(o, d, tnear, tfar);
+  rtcIntersect1(scene_, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  const bool via_instance = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID;
+  const TopGeometry& top = top_[via_instance ? rh.hit.instID[0] : rh.hit.geomID];
+  vec3 n;
+  if (top.instance) {
+    n = top.normal_matrix * vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);  // Ng arrives in the object's space
+  } else {
+    const uvec3 t = top.mesh->triangles[rh.hit.primID];
+    const vec3 a = top.mesh->positions[t.x], b = top.mesh->positions[t.y], c = top.mesh->positions[t.z];
+    n = glm::cross(b - a, c - a);
+  }
+  n = glm::normalize(n);
+  hit.t = rh.ray.tfar;
+  hit.position = o + rh.ray.tfar * d;
+  hit.normal = n;
+  hit.material = top.material;
+  hit.gwn = top.instance;
+  return true;
+}
+
+bool RenderScene::occluded(const vec3& o, const vec3& d, float tnear, float tfar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay ray = make_rayhit(o, d, tnear, tfar).ray;
+  rtcOccluded1(scene_, &context, &ray);
+  return ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+}  // namespace gwnrt::render
