@@ -15,64 +15,25 @@
 #include <gtest/gtest.h>
 
 #include "gwnrt/batch.h"
+#include "cli_util.h"
 #include "test_util.h"
 
 namespace gwnrt {
 namespace {
 
 namespace fs = std::filesystem;
+using test::quote;
+using test::read_file;
+using test::RunResult;
+using test::temp_path;
 
-// The test target does not know where the examples are built, so find the program next to the
-// test binary's own build directory; a build without examples skips these tests.
-std::string query_binary() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return {};
-  const fs::path candidate = self.parent_path() / ".." / "examples" / "gwnrt-query";
-  return fs::exists(candidate, ec) ? fs::canonical(candidate, ec).string() : std::string();
-}
+std::string query_binary() { return test::example_binary("gwnrt-query"); }
 
 std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
 std::string probe_points_path() { return test::data_path("../../examples/data/bunny_probe_points.txt"); }
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string temp_path(const std::string& stem) {
-  static int counter = 0;
-  return ::testing::TempDir() + "gwnrt_query_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" + stem;
-}
-
-struct RunResult {
-  bool exited = false;  // false: killed by a signal
-  int exit_code = -1;
-  std::string out, err;
-};
-
 RunResult run_query(const std::string& binary, const std::string& args, const std::string& stdin_path = "") {
-  const std::string out = temp_path("out.csv"), err = temp_path("err.txt");
-  // exec, so that a crash shows up as a signal in the status rather than as the shell's exit code.
-  std::string cmd = "exec " + quote(binary) + " " + args + " >" + quote(out) + " 2>" + quote(err);
-  if (!stdin_path.empty()) cmd += " <" + quote(stdin_path);
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exited = status != -1 && WIFEXITED(status);
-  if (r.exited) r.exit_code = WEXITSTATUS(status);
-  r.out = read_file(out);
-  r.err = read_file(err);
-  std::remove(out.c_str());
-  std::remove(err.c_str());
-  return r;
+  return test::run_program(binary, args, stdin_path);
 }
 
 struct Csv {
