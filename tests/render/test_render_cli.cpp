@@ -38,6 +38,12 @@ TEST_F(RenderCli, BundledSceneRenders) {
   expect_image(test::quote(kScene) + " --spp 1 --width 40 --height 24", ".png", 40, 24);
 }
 
+// Glass (a GWN object), rough metal, an emissive quad, a sun: every material and light kind.
+TEST_F(RenderCli, MaterialsSceneRenders) {
+  expect_image(test::quote(test::data_path("../../examples/data/materials_scene.json")) + " --spp 2 --width 32 --height 18",
+               ".exr", 32, 18);
+}
+
 TEST_F(RenderCli, MeshGetsTheDefaultSceneWithAovs) {
   const std::string out = test::temp_path("aovs.exr");
   const test::RunResult r = test::run_program(
