@@ -21,6 +21,8 @@
 
 #ifdef GWNRT_HAVE_EMBREE
 #include <embree3/rtcore.h>
+
+#include "embree_ray.h"
 #endif
 
 namespace gwnrt {
@@ -212,17 +214,7 @@ class EmbreeScene {
   EmbreeHit intersect(const Ray& r) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rh{};
-    rh.ray.org_x = r.origin.x;
-    rh.ray.org_y = r.origin.y;
-    rh.ray.org_z = r.origin.z;
-    rh.ray.dir_x = r.direction.x;
-    rh.ray.dir_y = r.direction.y;
-    rh.ray.dir_z = r.direction.z;
-    rh.ray.tnear = r.tnear;
-    rh.ray.tfar = r.tfar;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = examples::embree_ray_hit(r);
     rtcIntersect1(scene_, &context, &rh);
     EmbreeHit h;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;

@@ -40,6 +40,7 @@
 
 #include "brute_force_trace.h"
 #include "camera.h"
+#include "embree_ray.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/mesh.h"
 #include "gwnrt/model.h"
@@ -121,21 +122,7 @@ class EmbreeScene {
       rtcInitIntersectContext(&context);
       for (size_t i = range.begin(); i != range.end(); ++i) {
         const Ray& r = rays[i];
-        RTCRayHit rh;
-        rh.ray.org_x = r.origin.x;
-        rh.ray.org_y = r.origin.y;
-        rh.ray.org_z = r.origin.z;
-        rh.ray.tnear = r.tnear;
-        rh.ray.dir_x = r.direction.x;
-        rh.ray.dir_y = r.direction.y;
-        rh.ray.dir_z = r.direction.z;
-        rh.ray.time = 0.0f;
-        rh.ray.tfar = r.tfar;
-        rh.ray.mask = ~0u;
-        rh.ray.id = 0;
-        rh.ray.flags = 0;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        RTCRayHit rh = examples::embree_ray_hit(r);
         rtcIntersect1(scene_, &context, &rh);
         if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) hits[i] = {true, rh.ray.tfar};
       }

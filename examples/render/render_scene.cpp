@@ -1,5 +1,7 @@
 #include "render_scene.h"
 
+#include "embree_ray.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -29,25 +31,6 @@ RTCGeometry triangle_geometry(RTCDevice device, const Mesh& mesh) {
     for (int k = 0; k < 3; ++k) t[3 * i + k] = mesh.triangles[i][k];
   rtcCommitGeometry(g);
   return g;
-}
-
-RTCRayHit make_rayhit(const vec3& o, const vec3& d, float tnear, float tfar) {
-  RTCRayHit rh;
-  rh.ray.org_x = o.x;
-  rh.ray.org_y = o.y;
-  rh.ray.org_z = o.z;
-  rh.ray.dir_x = d.x;
-  rh.ray.dir_y = d.y;
-  rh.ray.dir_z = d.z;
-  rh.ray.tnear = tnear;
-  rh.ray.tfar = tfar;
-  rh.ray.time = 0.0f;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  return rh;
 }
 
 }  // namespace
@@ -138,7 +121,7 @@ Status RenderScene::build(const SceneDesc& desc) {
 bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfar, SurfaceHit& hit) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRayHit rh = make_rayhit(o, d, tnear, tfar);
+  RTCRayHit rh = examples::embree_ray_hit(o, d, tnear, tfar);
   rtcIntersect1(scene_, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   const bool via_instance = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID;
@@ -163,7 +146,7 @@ bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfa
 bool RenderScene::occluded(const vec3& o, const vec3& d, float tnear, float tfar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRay ray = make_rayhit(o, d, tnear, tfar).ray;
+  RTCRay ray = examples::embree_ray_hit(o, d, tnear, tfar).ray;
   rtcOccluded1(scene_, &context, &ray);
   return ray.tfar == -std::numeric_limits<float>::infinity();
 }

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "../test_util.h"
+#include "embree_ray.h"
 #include "camera.h"
 #include "gwnrt/distance.h"
 #include "gwnrt/embree.h"
@@ -265,20 +266,7 @@ std::string describe(const RTCRayHit& h) {
 }
 
 RTCRayHit make_rayhit(const Ray& r, unsigned id = 0, unsigned mask = ~0u) {
-  RTCRayHit rh{};
-  rh.ray.org_x = r.origin.x;
-  rh.ray.org_y = r.origin.y;
-  rh.ray.org_z = r.origin.z;
-  rh.ray.dir_x = r.direction.x;
-  rh.ray.dir_y = r.direction.y;
-  rh.ray.dir_z = r.direction.z;
-  rh.ray.tnear = r.tnear;
-  rh.ray.tfar = r.tfar;
-  rh.ray.mask = mask;
-  rh.ray.id = id;
-  rh.hit.geomID = rh.hit.primID = kInvalidId;
-  for (unsigned& i : rh.hit.instID) i = kInvalidId;
-  return rh;
+  return examples::embree_ray_hit(r, mask, id);
 }
 
 class Context {

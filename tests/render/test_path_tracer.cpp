@@ -111,6 +111,14 @@ double mean_radiance_on(const PathRender& r, float albedo, size_t& pixels) {
   return pixels ? sum / double(pixels) : 0.0;
 }
 
+// A square of side 2·h at height y, normal up (or down).
+Mesh square(float h, float y, bool up) {
+  Mesh m;
+  m.positions = {{-h, y, -h}, {h, y, -h}, {h, y, h}, {-h, y, h}};
+  m.triangles = up ? std::vector<uvec3>{{0, 2, 1}, {0, 3, 2}} : std::vector<uvec3>{{0, 1, 2}, {0, 2, 3}};
+  return m;
+}
+
 // A white-ish diffuse floor (albedo a, y = 0) under an emissive ceiling (radiance L, y = 1,
 // facing down), both squares of side 2000, nothing else: the floor's irradiance is π·L times
 // the ceiling's form factor, 1 - O(height / side), so the floor shows a·L (to 1e-3). The light
@@ -123,12 +131,9 @@ TEST(PathTracer, FloorUnderAnEmissiveCeilingReflectsAlbedoTimesRadiance) {
                  Material{MaterialKind::kEmissive, Spectrum(0.0f), 0.0f, 1.5f, Spectrum(emission)}};
   s.material_names = {"floor", "ceiling"};
   MeshDesc floor, ceiling;
-  const float h = 1000.0f;
-  floor.mesh.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
-  floor.mesh.triangles = {{0, 2, 1}, {0, 3, 2}};
+  floor.mesh = square(1000.0f, 0.0f, true);
   floor.material = 0;
-  ceiling.mesh.positions = {{-h, 1, -h}, {h, 1, -h}, {h, 1, h}, {-h, 1, h}};
-  ceiling.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  ceiling.mesh = square(1000.0f, 1.0f, false);
   ceiling.material = 1;
   s.meshes = {floor, ceiling};
   s.camera.eye = vec3(0.0f, 0.5f, 0.0f);
@@ -154,9 +159,7 @@ TEST(PathTracer, FloorUnderTheSunFollowsLambert) {
   s.materials = {Material{MaterialKind::kDiffuse, Spectrum(albedo)}};
   s.material_names = {"floor"};
   MeshDesc floor;
-  const float h = 1000.0f;
-  floor.mesh.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
-  floor.mesh.triangles = {{0, 2, 1}, {0, 3, 2}};
+  floor.mesh = square(1000.0f, 0.0f, true);
   s.meshes = {floor};
   s.sun.direction = glm::normalize(vec3(0.3f, 0.8f, 0.2f));
   s.sun.radiance = Spectrum(1.0e4f);
