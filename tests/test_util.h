@@ -32,6 +32,27 @@ inline GwnModel build_model(Mesh mesh) {
   return model;
 }
 
+// Float random numbers for rays and points (a fixed seed: the tests are reproducible).
+class Random {
+ public:
+  explicit Random(uint32_t seed) : g_(seed) {}
+  float uniform(float a, float b) { return std::uniform_real_distribution<float>(a, b)(g_); }
+  int index(int n) { return std::uniform_int_distribution<int>(0, n - 1)(g_); }
+  vec3 in_box(const Aabb& b) { return {uniform(b.lo.x, b.hi.x), uniform(b.lo.y, b.hi.y), uniform(b.lo.z, b.hi.z)}; }
+  vec3 unit() {
+    for (;;) {
+      const vec3 v(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+      const float l = glm::length(v);
+      if (l > 0.1f && l <= 1.0f) return v / l;
+    }
+  }
+  // A direction length between 1e-2 and 1e2: t is in units of it, whatever it is.
+  float scale() { return std::pow(10.0f, uniform(-2.0f, 2.0f)); }
+
+ private:
+  std::mt19937 g_;
+};
+
 // Hexagon fan, slightly curved: centre raised by 0.15 above the unit rim, normals up.
 inline Mesh make_hexagon_fan() {
   Mesh m;

@@ -36,7 +36,7 @@ struct LightChoice {
 
 LightChoice light_choice(const RenderScene& scene) {
   LightChoice c;
-  c.environment = !is_black(scene.environment().radiance(vec3(0, 1, 0))) || !scene.environment().is_constant();
+  c.environment = scene.environment_emits();
   c.sun = scene.sun().enabled();
   c.area = !scene.area_lights().empty();
   return c;

@@ -113,6 +113,8 @@ Status RenderScene::build(const SceneDesc& desc) {
   } else if (Status s = Environment::load(desc.environment.file, desc.environment.scale, environment_); !s.ok()) {
     return s;
   }
+  const Spectrum up = environment_.radiance(vec3(0.0f, 1.0f, 0.0f));
+  environment_emits_ = !environment_.is_constant() || up.x > 0.0f || up.y > 0.0f || up.z > 0.0f;
   const Aabb box = scene_bounds(desc);
   radius_ = box.valid() ? 0.5f * glm::length(box.hi - box.lo) : 1.0f;
   return Status::Ok();

@@ -50,6 +50,7 @@ class RenderScene {
   const SceneDesc& desc() const { return *desc_; }
   const std::vector<Material>& materials() const { return desc_->materials; }
   const Environment& environment() const { return environment_; }
+  bool environment_emits() const { return environment_emits_; }  // anything to sample in it
   const Sun& sun() const { return desc_->sun; }
   const AreaLights& area_lights() const { return lights_; }
   float scene_radius() const { return radius_; }  // for ray offsets
@@ -70,6 +71,7 @@ class RenderScene {
   std::vector<GWNRTMesh> gwn_meshes_;
   std::vector<TopGeometry> top_;  // by geomID
   Environment environment_;
+  bool environment_emits_ = false;
   AreaLights lights_;
   float radius_ = 1.0f;
 };

@@ -163,22 +163,7 @@ Mesh transformed(const Mesh& m, const Affine& f) {
 // Rays.
 // ---------------------------------------------------------------------------------------------
 
-class Random {
- public:
-  explicit Random(uint32_t seed) : g_(seed) {}
-  float uniform(float a, float b) { return std::uniform_real_distribution<float>(a, b)(g_); }
-  vec3 in_box(const Aabb& b) { return {uniform(b.lo.x, b.hi.x), uniform(b.lo.y, b.hi.y), uniform(b.lo.z, b.hi.z)}; }
-  vec3 unit() {
-    for (;;) {
-      const vec3 v(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-      const float l = glm::length(v);
-      if (l > 0.1f && l <= 1.0f) return v / l;
-    }
-  }
-
- private:
-  std::mt19937 g_;
-};
+using test::Random;
 
 double diagonal(const Aabb& b) { return glm::length(dvec3(b.hi) - dvec3(b.lo)); }
 Aabb grown(const Aabb& b, float by) { return Aabb{b.lo - vec3(by), b.hi + vec3(by)}; }
