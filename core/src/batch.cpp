@@ -20,11 +20,21 @@ void parallel_map(std::span<const In> in, std::span<Out> out, size_t grain, std:
 
 }  // namespace
 
-Status validate_request(const QueryRequest& request) {
+Status validate_request(const QueryRequest& request, const ModelView* view) {
   if (request.taylor.order < 0 || request.taylor.order > 2)
     return {StatusCode::kInvalidArgument, "Taylor order must be 0, 1 or 2, got " + std::to_string(request.taylor.order)};
   if (!(request.taylor.beta > 0.0f) || !(request.taylor.beta < kInfinity))
     return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
+  if (!std::isfinite(request.level)) return {StatusCode::kInvalidArgument, "level w* must be a finite number"};
+  const NewtonOptions& n = request.newton;
+  if (!(n.tolerance > 0.0f) || !(n.max_step > 0.0f) || !(n.mesh_fraction > 0.0f && n.mesh_fraction <= 1.0f) ||
+      !std::isfinite(n.tolerance) || !std::isfinite(n.max_step))
+    return {StatusCode::kInvalidArgument,
+            "Newton options: tolerance and max_step must be finite and > 0, mesh_fraction in (0, 1]"};
+  if (view && (request.fields & kSheetFields) && request.level != view->sheet_level)
+    return {StatusCode::kInvalidArgument, "level " + std::to_string(request.level) +
+                                              " asked for, but the model's sheets were classified for level " +
+                                              std::to_string(view->sheet_level) + " (GwnModel::set_sheet_level)"};
   return Status::Ok();
 }
 
@@ -33,8 +43,8 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
   if (points.size() != results.size())
     return {StatusCode::kInvalidArgument, "evaluate_points: " + std::to_string(points.size()) + " points but " +
                                               std::to_string(results.size()) + " result slots"};
-  if (Status s = validate_request(request); !s.ok()) return s;
   const ModelView view = model_view(model);
+  if (Status s = validate_request(request, &view); !s.ok()) return s;
   parallel_map(points, results, 256, progress, [&](const vec3& x) { return evaluate_point(view, x, request); });
   return Status::Ok();
 }

@@ -213,15 +213,19 @@ TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size) {
     const uvec3 tri = mesh.triangles[t];
     if (!is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) kept.push_back(t);
   }
-  const size_t n = kept.size();
+  return build_triangle_tree(mesh, kept, max_leaf_size);
+}
+
+TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size) {
+  const size_t n = selection.size();
   std::vector<Aabb> bounds(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    for (int k = 0; k < 3; ++k) bounds[i].extend(mesh.positions[mesh.triangles[kept[i]][k]]);
+    for (int k = 0; k < 3; ++k) bounds[i].extend(mesh.positions[mesh.triangles[selection[i]][k]]);
   });
   TriangleTree tree;
   tree.bvh = build_wide_bvh(bounds, max_leaf_size);
   tree.triangle_ids.resize(n);
-  for (size_t i = 0; i < n; ++i) tree.triangle_ids[i] = kept[tree.bvh.primitive_order[i]];
+  for (size_t i = 0; i < n; ++i) tree.triangle_ids[i] = selection[tree.bvh.primitive_order[i]];
   tree.vertices.resize(3 * n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const uvec3 tri = mesh.triangles[tree.triangle_ids[i]];

@@ -4,7 +4,7 @@
 namespace gwnrt::cuda {
 namespace {
 
-// One multipole triangle tree in device memory (M itself, and the cone C over ∂M).
+// One multipole triangle tree in device memory (M itself, the cone C over ∂M, the sheets).
 struct DeviceTriangleTree {
   DeviceBuffer<WideNode> nodes;
   DeviceBuffer<WideNodeExpansion> expansion;
@@ -33,6 +33,7 @@ struct DeviceTriangleTree {
 struct DeviceModel::Buffers {
   DeviceTriangleTree triangles;
   DeviceTriangleTree cone;
+  DeviceTriangleTree sheets;
   DeviceBuffer<WideNodeLength> cone_lengths;
   DeviceBuffer<ConeSegment> cone_segments;
   DeviceBuffer<WideNode> segment_nodes;
@@ -69,6 +70,7 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   ModelView v = model.view();
   if (Status s = b->triangles.upload(model.triangle_tree(), v.triangles); !s.ok()) return s;
   if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
+  if (Status s = b->sheets.upload(model.sheet_tree(), v.sheets); !s.ok()) return s;
   const SegmentTree& st = model.boundary_tree();
   const std::span<const WideNodeLength> lengths = model.cone_boundary_lengths();
   const std::span<const ConeSegment> segments = model.cone_segments();

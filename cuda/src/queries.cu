@@ -18,7 +18,8 @@ Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, c
                        std::span<PointResult> results) {
   if (points.size() != results.size())
     return {StatusCode::kInvalidArgument, "evaluate_points: points and results differ in size"};
-  if (Status s = validate_request(request); !s.ok()) return s;
+  const ModelView view = model.view();
+  if (Status s = validate_request(request, &view); !s.ok()) return s;
   if (points.empty()) return Status::Ok();
   if (!model.view().triangles.bvh.nodes) return {StatusCode::kInvalidArgument, "evaluate_points: model not uploaded"};
   return map_on_device(points, results, 128, EvaluatePoint{model.view(), request});

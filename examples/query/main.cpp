@@ -1,5 +1,6 @@
-// gwnrt-query: evaluate the generalized winding number (and its derivatives and distances) of a
-// triangle mesh at points read from a file, and write them as CSV.
+// gwnrt-query: evaluate the generalized winding number (and its derivatives, distances, the
+// signed distance to S and the Newton projection onto it) of a triangle mesh at points read from
+// a file, and write them as CSV.
 #include <unistd.h>
 
 #include <atomic>
@@ -8,6 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,64 +45,84 @@ int fail(const std::string& message) {
   return 1;
 }
 
-struct FieldName {
+// An output of --fields: what evaluate_point must compute for it, its CSV columns and how to
+// write them. "all" is every field before the signed-distance ones, which need a level.
+struct Field {
   const char* name;
-  uint32_t bits;
+  uint32_t request_bits;
+  std::initializer_list<const char*> headers;
+  void (*write)(CsvWriter&, const PointResult&);
 };
-constexpr FieldName kFieldNames[] = {
-    {"w", gwnrt::kFieldW},
-    {"grad", gwnrt::kFieldGradient},
-    {"hess", gwnrt::kFieldHessian},
-    {"udist", gwnrt::kFieldUnsignedDistance},
-    {"bdist", gwnrt::kFieldBoundaryDistance},
-};
-constexpr uint32_t kAllFields = gwnrt::kFieldW | gwnrt::kFieldGradient | gwnrt::kFieldHessian |
-                                gwnrt::kFieldUnsignedDistance | gwnrt::kFieldBoundaryDistance;
 
-std::optional<uint32_t> field_bits(const std::string& name) {
-  if (name == "all") return kAllFields;
-  for (const FieldName& f : kFieldNames) {
-    if (name == f.name) return f.bits;
+const char* piece_name(gwnrt::DistancePiece piece) {
+  switch (piece) {
+    case gwnrt::DistancePiece::kSheet: return "sheet";
+    case gwnrt::DistancePiece::kSmooth: return "smooth";
+    default: return "bound";
   }
+}
+
+const Field kFields[] = {
+    {"w", gwnrt::kFieldW, {"w"}, [](CsvWriter& c, const PointResult& r) { c.field(r.w); }},
+    {"grad", gwnrt::kFieldGradient, {"gx", "gy", "gz"},
+     [](CsvWriter& c, const PointResult& r) {
+       for (int a = 0; a < 3; ++a) c.field(r.gradient[a]);
+     }},
+    {"hess", gwnrt::kFieldHessian, {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"},
+     [](CsvWriter& c, const PointResult& r) {
+       for (float h : {r.hessian.xx, r.hessian.xy, r.hessian.xz, r.hessian.yy, r.hessian.yz, r.hessian.zz}) c.field(h);
+     }},
+    {"udist", gwnrt::kFieldUnsignedDistance, {"udist"}, [](CsvWriter& c, const PointResult& r) { c.field(r.unsigned_distance); }},
+    {"bdist", gwnrt::kFieldBoundaryDistance, {"bdist"}, [](CsvWriter& c, const PointResult& r) { c.field(r.boundary_distance); }},
+    {"sdf", gwnrt::kFieldSignedDistance, {"sdf", "sdf_piece"},
+     [](CsvWriter& c, const PointResult& r) {
+       c.field(r.sdf.distance);
+       c.field(piece_name(r.sdf.piece));
+     }},
+    {"sdf1", gwnrt::kFieldPseudoDistance, {"sdf1"}, [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.first_order); }},
+    {"sdf2", gwnrt::kFieldPseudoDistance, {"sdf2"}, [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.second_order); }},
+    {"sheet_dist", gwnrt::kFieldSheetDistance, {"sheet_dist"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.sheet_distance); }},
+    {"proj", gwnrt::kFieldProjection, {"proj_x", "proj_y", "proj_z", "proj_iters", "proj_converged"},
+     [](CsvWriter& c, const PointResult& r) {
+       for (int a = 0; a < 3; ++a) c.field(r.projection.point[a]);
+       c.field(unsigned(r.projection.iterations));
+       c.field(unsigned(r.projection.converged));
+     }},
+    {"hbound", gwnrt::kFieldHarnackBound, {"hbound"}, [](CsvWriter& c, const PointResult& r) { c.field(r.harnack_bound); }},
+};
+constexpr size_t kFieldsInAll = 5;  // w, grad, hess, udist, bdist
+
+// The indices into kFields that `name` selects.
+std::optional<std::vector<size_t>> field_indices(const std::string& name) {
+  if (name == "all") {
+    std::vector<size_t> all(kFieldsInAll);
+    for (size_t i = 0; i < kFieldsInAll; ++i) all[i] = i;
+    return all;
+  }
+  for (size_t i = 0; i < std::size(kFields); ++i)
+    if (name == kFields[i].name) return std::vector<size_t>{i};
   return std::nullopt;
 }
 
 std::string valid_field_list() {
   std::string list;
-  for (const FieldName& f : kFieldNames) list += std::string(list.empty() ? "" : ", ") + f.name;
-  return list + ", all";
+  for (const Field& f : kFields) list += std::string(list.empty() ? "" : ", ") + f.name;
+  return list + ", all (= w, grad, hess, udist, bdist)";
 }
 
-void write_csv(CsvWriter& csv, uint32_t fields, const std::vector<vec3>& points, const std::vector<PointResult>& results) {
+// Columns in the order of kFields, whatever the order asked for.
+void write_csv(CsvWriter& csv, const std::vector<bool>& selected, const std::vector<vec3>& points,
+               const std::vector<PointResult>& results) {
   for (const char* h : {"x", "y", "z"}) csv.field(h);
-  if (fields & gwnrt::kFieldW) csv.field("w");
-  if (fields & gwnrt::kFieldGradient) {
-    for (const char* h : {"gx", "gy", "gz"}) csv.field(h);
-  }
-  if (fields & gwnrt::kFieldHessian) {
-    for (const char* h : {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"}) csv.field(h);
-  }
-  if (fields & gwnrt::kFieldUnsignedDistance) csv.field("udist");
-  if (fields & gwnrt::kFieldBoundaryDistance) csv.field("bdist");
+  for (size_t f = 0; f < std::size(kFields); ++f)
+    if (selected[f])
+      for (const char* h : kFields[f].headers) csv.field(h);
   csv.end_row();
-
   for (size_t i = 0; i < points.size(); ++i) {
-    const vec3& p = points[i];
-    const PointResult& r = results[i];
-    csv.field(p.x);
-    csv.field(p.y);
-    csv.field(p.z);
-    if (fields & gwnrt::kFieldW) csv.field(r.w);
-    if (fields & gwnrt::kFieldGradient) {
-      csv.field(r.gradient.x);
-      csv.field(r.gradient.y);
-      csv.field(r.gradient.z);
-    }
-    if (fields & gwnrt::kFieldHessian) {
-      for (float h : {r.hessian.xx, r.hessian.xy, r.hessian.xz, r.hessian.yy, r.hessian.yz, r.hessian.zz}) csv.field(h);
-    }
-    if (fields & gwnrt::kFieldUnsignedDistance) csv.field(r.unsigned_distance);
-    if (fields & gwnrt::kFieldBoundaryDistance) csv.field(r.boundary_distance);
+    for (int a = 0; a < 3; ++a) csv.field(points[i][a]);
+    for (size_t f = 0; f < std::size(kFields); ++f)
+      if (selected[f]) kFields[f].write(csv, results[i]);
     csv.end_row();
   }
 }
@@ -117,6 +140,9 @@ int main(int argc, char** argv) {
   int order = 2;
   float beta = 2.0f;
   bool exact = false;
+  float level = 0.5f;
+  unsigned newton_iterations = gwnrt::NewtonOptions{}.max_iterations;
+  float newton_tolerance = gwnrt::NewtonOptions{}.tolerance;
   std::string device = "cpu";
   int threads = 0;
   std::string output_path = "-";
@@ -129,7 +155,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Validator(
           [](std::string& name) {
-            return field_bits(name) ? std::string() : "unknown field '" + name + "' (valid: " + valid_field_list() + ")";
+            return field_indices(name) ? std::string() : "unknown field '" + name + "' (valid: " + valid_field_list() + ")";
           },
           "FIELD"));
   app.add_option("--order", order, "Taylor expansion order of the tree approximation")
@@ -148,7 +174,17 @@ int main(int argc, char** argv) {
             return std::string();
           },
           "BETA > 0"));
-  app.add_flag("--exact", exact, "Brute-force double-precision reference instead of the tree (w, grad, hess only)");
+  app.add_flag("--exact", exact,
+               "Brute-force double-precision reference instead of the tree (w, grad, hess, sdf1, sdf2; the sdf's w too)");
+  app.add_option("--level", level, "Level w*: S = boundary of {w > w*} (sdf, sdf1, sdf2, sheet_dist, proj, hbound)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1.0e6f, 1.0e6f));
+  app.add_option("--newton-iterations", newton_iterations, "Newton projection (proj): iteration cap")
+      ->capture_default_str()
+      ->check(CLI::Range(0u, 100000u));
+  app.add_option("--newton-tolerance", newton_tolerance, "Newton projection (proj): converged when |w - w*| <= this")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--device", device, "Where to evaluate")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
@@ -157,7 +193,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   uint32_t fields = 0;
-  for (const std::string& name : field_names) fields |= *field_bits(name);
+  std::vector<bool> selected(std::size(kFields), false);
+  for (const std::string& name : field_names) {
+    const std::vector<size_t> indices = field_indices(name).value();  // checked by the option's validator
+    for (size_t f : indices) {
+      selected[f] = true;
+      fields |= kFields[f].request_bits;
+    }
+  }
   if (fields == 0) return fail("no fields requested");
 
   const bool chatty = verbose || ::isatty(2) == 1;
@@ -167,6 +210,9 @@ int main(int argc, char** argv) {
   request.taylor.order = order;
   request.taylor.beta = beta;
   request.exact = exact;
+  request.level = level;
+  request.newton.max_iterations = newton_iterations;
+  request.newton.tolerance = newton_tolerance;
 
   // Checked before the mesh is loaded so a large load is not wasted on a request that cannot run.
   const bool use_cuda = device == "cuda";
@@ -188,6 +234,9 @@ int main(int argc, char** argv) {
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
   if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
+  if (level != model.sheet_level()) {
+    if (gwnrt::Status s = model.set_sheet_level(level); !s.ok()) return fail(s.message());
+  }
   const gwnrt::MeshLoadReport& report = loaded.report;
   const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
 
@@ -197,8 +246,9 @@ int main(int argc, char** argv) {
     if (report.polygons_fanned) std::fprintf(stderr, " (%zu polygons fanned)", report.polygons_fanned);
     std::fprintf(stderr, ", %zu degenerate, %zu boundary segments%s; loaded in %.3f s\n", report.degenerate_triangles,
                  model.boundary().segment_count(), model.boundary().segment_count() ? "" : " (closed)", load_seconds);
-    std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s)\n", kProgram, build_seconds,
-                 model.timings().tree_seconds, model.timings().boundary_seconds);
+    std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s, sheets %.3f s: %u of %zu triangles)\n",
+                 kProgram, build_seconds, model.timings().tree_seconds, model.timings().boundary_seconds,
+                 model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, report.triangle_count);
   }
 
   std::vector<vec3> points;
@@ -233,7 +283,7 @@ int main(int argc, char** argv) {
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
   if (!out) return fail(output_path + ": cannot open for writing: " + std::strerror(errno));
   CsvWriter csv(out);
-  write_csv(csv, fields, points, results);
+  write_csv(csv, selected, points, results);
   bool ok = csv.flush();
   ok = (std::fflush(out) == 0) && ok;
   if (!to_stdout) ok = (std::fclose(out) == 0) && ok;

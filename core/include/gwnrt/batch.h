@@ -18,7 +18,9 @@ inline ModelView model_view(const GwnModel& model) { return model.view(); }
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress = nullptr);
 
-Status validate_request(const QueryRequest& request);
+// Order, beta, level and Newton options; with `view`, also that sdf and sheet-distance requests
+// ask for the level the view's sheets were classified for.
+Status validate_request(const QueryRequest& request, const ModelView* view = nullptr);
 
 // hits.size() must equal rays.size(). Invalid rays (non-finite, zero direction) are not an
 // error of the batch: their hit has `invalid` set. Fails on a size mismatch or bad options.

@@ -57,6 +57,14 @@ GWNRT_HD inline float gradient_bound_step(float radius, float gradient_bound, fl
   return 2.0f * radius / (2.0f + p + sqrtf(p * (4.0f + p)));
 }
 
+// A ball around a point on which φ reaches none of the levels `levels`: the larger of the
+// Harnack step and the Lipschitz step, each safe alone (fmaxf also drops the NaN of the second
+// on ∂M itself). `radius` is the distance to ∂M, `gradient_bound` K >= |∇φ| at the centre.
+GWNRT_HD inline float level_free_radius(float radius, float gradient_bound, float phi, const LevelBracket& levels) {
+  const float gap = min_of(phi - levels.below, levels.above - phi);
+  return fmaxf(angle_valued_step(radius, phi, levels), gradient_bound_step(radius, gradient_bound, gap));
+}
+
 // The third safe step, of second order, for the last steps onto a level (where the first-order
 // steps above only shrink the gap by a constant factor each). Differentiating the Biot–Savart
 // field once more gives |∂²φ/∂t²| <= (1/4π)∮ 2|dl| / |l - y|³ <= 2K(y)/R(y), so on the ball of

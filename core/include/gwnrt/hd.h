@@ -37,6 +37,9 @@ struct Sym3 {
     return *this;
   }
   GWNRT_HD Sym3 operator*(T s) const { return {xx * s, xy * s, xz * s, yy * s, yz * s, zz * s}; }
+  GWNRT_HD glm::vec<3, T> apply(const glm::vec<3, T>& v) const {  // the matrix times v
+    return {xx * v.x + xy * v.y + xz * v.z, xy * v.x + yy * v.y + yz * v.z, xz * v.x + yz * v.y + zz * v.z};
+  }
 };
 using sym3 = Sym3<float>;
 

@@ -55,16 +55,31 @@ std::vector<ConeSegment> cone_segments(const TriangleTree& cone);
 std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone);
 
 TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size);
+// The tree over the triangles `selection` of the mesh (input indices, none of zero area); its
+// triangle_ids are those input indices.
+TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size);
+
+// Sheet classification (DESIGN §1, signed distance). Across a triangle w jumps by its own ±1;
+// the other triangles' w, w_o, is continuous there, so the two sides carry w_o ± 1/2 and the
+// triangle is a piece of S = ∂{w > w*} when they straddle w*: |w_o − w*| < 1/2. (Equivalently,
+// the side the normal points to, w_o − 1/2, lies in (w* − 1, w*).) w_o is taken at the centroid,
+// once per triangle: per input triangle, NaN for the zero-area ones (never sheets).
+std::vector<float> other_triangles_winding(const TriangleTree& tree, size_t triangle_count, float beta);
+GWNRT_HD inline bool is_sheet(float other_winding, float level) {
+  return fabsf(other_winding - level) < 0.5f;  // false for NaN
+}
 SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
 
 struct BuildOptions {
   uint32_t max_leaf_triangles = 4;
   uint32_t max_leaf_segments = 4;
+  float sheet_level = 0.5f;  // w* of the sheet tree built with the model (set_sheet_level changes it)
 };
 
 struct BuildTimings {
   double tree_seconds = 0;      // triangle BVH + moments
   double boundary_seconds = 0;  // ∂M extraction + its tree
+  double sheet_seconds = 0;     // w of the other triangles at every centroid + the sheet tree
 };
 
 class GwnModel {
@@ -84,6 +99,14 @@ class GwnModel {
   std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
   const Aabb& bounds() const { return bounds_; }
   float surface_margin() const { return surface_margin_; }
+  // Sheets: per input triangle the other triangles' w at its centroid (computed once, at build),
+  // and the tree over the triangles that are sheets for sheet_level().
+  std::span<const float> other_winding() const { return other_winding_; }
+  const TriangleTree& sheet_tree() const { return sheets_; }
+  float sheet_level() const { return sheet_level_; }
+  // Rebuilds the sheet tree for another w* (from the stored values: no w is evaluated). Not
+  // thread-safe with queries running on this model. Fails on a non-finite level.
+  Status set_sheet_level(float level);
   ModelView view() const;
   const BuildTimings& timings() const { return timings_; }
 
@@ -98,6 +121,10 @@ class GwnModel {
   std::vector<SmoothRegion> smooth_regions_;
   Aabb bounds_;
   float surface_margin_ = 0;
+  std::vector<float> other_winding_;
+  TriangleTree sheets_;
+  float sheet_level_ = 0.5f;
+  uint32_t max_leaf_triangles_ = 4;
   BuildTimings timings_;
 };
 

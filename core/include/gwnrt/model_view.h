@@ -38,6 +38,10 @@ struct ModelView {
   // are exactly the segments of ∂M), for the tracer's bound on |∇w| (phase.h).
   const WideNodeLength* cone_boundary_lengths = nullptr;
   const ConeSegment* cone_segments = nullptr;  // per cone triangle, in leaf order
+  // The sheet triangles of M for the level sheet_level (model.h, is_sheet): the distance to
+  // the sheet pieces of S is the distance to them.
+  TriangleTreeView sheets;
+  float sheet_level = 0.5f;
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M

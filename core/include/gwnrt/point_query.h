@@ -4,6 +4,7 @@
 
 #include "gwnrt/distance.h"
 #include "gwnrt/model_view.h"
+#include "gwnrt/signed_distance.h"
 #include "gwnrt/winding_number.h"
 
 namespace gwnrt {
@@ -14,12 +15,22 @@ enum QueryField : uint32_t {
   kFieldHessian = 1u << 2,
   kFieldUnsignedDistance = 1u << 3,
   kFieldBoundaryDistance = 1u << 4,
+  kFieldSignedDistance = 1u << 5,  // sdf (with sdf1, sdf2, the sheet distance and the winning piece)
+  kFieldPseudoDistance = 1u << 6,  // sdf1, sdf2 alone
+  kFieldSheetDistance = 1u << 7,   // the distance to the sheet triangles alone
+  kFieldProjection = 1u << 8,      // Newton projection onto the smooth pieces
+  kFieldHarnackBound = 1u << 9,    // ρ(x) <= dist(x, S)
 };
+
+// The fields that read the model's sheets, which must have been classified for the request's level.
+inline constexpr uint32_t kSheetFields = kFieldSignedDistance | kFieldSheetDistance;
 
 struct QueryRequest {
   uint32_t fields = kFieldW;
   TaylorOptions taylor;
-  bool exact = false;  // brute-force double sum instead of the tree (w, ∇w, H_w only)
+  bool exact = false;  // brute-force double sum instead of the tree (w, ∇w, H_w and the pseudo-SDF)
+  float level = 0.5f;  // w*: S = ∂{w > w*}
+  NewtonOptions newton;
 };
 
 struct PointResult {
@@ -31,13 +42,17 @@ struct PointResult {
   float bary_u = 0, bary_v = 0;          // of the closest point on nearest_triangle
   float boundary_distance = 0;           // +inf for a closed mesh
   uint32_t nearest_boundary_segment = kEmptyLane;
+  SignedDistance sdf;                    // distance, first_order, second_order, sheet distance
+  SurfaceProjection projection;
+  float harnack_bound = 0;
 };
 
 GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x, const QueryRequest& request) {
   PointResult r;
-  const bool want_gradient = request.fields & kFieldGradient;
-  const bool want_hessian = request.fields & kFieldHessian;
-  if (request.fields & (kFieldW | kFieldGradient | kFieldHessian)) {
+  const bool want_pseudo = request.fields & (kFieldSignedDistance | kFieldPseudoDistance);
+  const bool want_gradient = want_pseudo || (request.fields & kFieldGradient);
+  const bool want_hessian = want_pseudo || (request.fields & kFieldHessian);
+  if (want_pseudo || (request.fields & (kFieldW | kFieldGradient | kFieldHessian))) {
     if (request.exact) {
       const WindingSampleExact s = winding_number_exact(model.triangles, x, want_gradient, want_hessian);
       r.w = float(s.w);
@@ -51,6 +66,22 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
       r.hessian = s.hessian;
     }
   }
+  const WindingSample sample{r.w, r.gradient, r.hessian};
+  if (request.fields & kFieldSignedDistance) {
+    r.sdf = signed_distance(model, x, request.level, request.taylor.beta, sample);
+  } else {
+    if (request.fields & kFieldPseudoDistance) {
+      r.sdf.first_order = pseudo_distance(r.w, r.gradient, request.level);
+      r.sdf.second_order = curvature_corrected_distance(r.w, r.gradient, r.hessian, request.level);
+    }
+    if (request.fields & kFieldSheetDistance) {
+      const NearestPrimitive n = unsigned_distance(model.sheets, x);
+      r.sdf.sheet_distance = n.distance;
+      r.sdf.sheet_triangle = n.primitive;
+    }
+  }
+  if (request.fields & kFieldProjection)
+    r.projection = project_onto_surface(model, x, request.level, request.taylor, request.newton);
   if (request.fields & kFieldUnsignedDistance) {
     const NearestPrimitive n = unsigned_distance(model.triangles, x);
     r.unsigned_distance = n.distance;
@@ -62,6 +93,11 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
     const NearestPrimitive n = boundary_distance(model.boundary, x);
     r.boundary_distance = n.distance;
     r.nearest_boundary_segment = n.primitive;
+  }
+  if (request.fields & kFieldHarnackBound) {
+    const float mesh_distance = (request.fields & kFieldUnsignedDistance) ? r.unsigned_distance
+                                                                           : unsigned_distance(model.triangles, x).distance;
+    r.harnack_bound = harnack_lower_bound(model, x, request.level, request.taylor.beta, mesh_distance);
   }
   return r;
 }

@@ -298,10 +298,7 @@ class SurfaceTracer {
       const LevelBracket levels = bracket_levels(phi, phase_);
       const float gap_below = phi - levels.below, gap_above = levels.above - phi;
       const float gap = min_of(gap_below, gap_above);
-      // Two safe balls; either keeps φ off the levels, so the larger is taken (fmaxf also drops
-      // the NaN of the second on ∂M itself).
-      const float ball =
-          fmaxf(angle_valued_step(radius, phi, levels), gradient_bound_step(radius, sample.gradient_bound, gap));
+      const float ball = level_free_radius(radius, sample.gradient_bound, phi, levels);
       if (overstepped && t - t_prev > rho_prev + ball) {  // the long step was not covered
         t = t_prev + rho_prev;
         overstepped = false;
