@@ -1,6 +1,4 @@
 // Sheet classification: the other triangles' w at every triangle's centroid (model.h).
-#include <limits>
-
 #include <tbb/parallel_for.h>
 
 #include "gwnrt/model.h"
@@ -23,16 +21,16 @@ struct SumWithoutOne {
 
 }  // namespace
 
-std::vector<float> other_triangles_winding(const TriangleTree& tree, size_t triangle_count, float beta) {
-  std::vector<float> out(triangle_count, std::numeric_limits<float>::quiet_NaN());
+void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
+                             std::span<float> out) {
   const TriangleTreeView view = tree.view();
-  tbb::parallel_for(uint32_t(0), view.triangle_count, [&](uint32_t i) {
+  tbb::parallel_for(size_t(0), leaves.size(), [&](size_t k) {
+    const uint32_t i = leaves[k];
     const vec3 centroid = (view.vertices[3 * i] + view.vertices[3 * i + 1] + view.vertices[3 * i + 2]) / 3.0f;
     SumWithoutOne visitor{{view, centroid, {}}, i};
     visit_multipole(view, centroid, beta, visitor);
     out[view.triangle_ids[i]] = visitor.sum.acc.omega * kInv4Pi;
   });
-  return out;
 }
 
 }  // namespace gwnrt

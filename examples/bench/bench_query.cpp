@@ -87,7 +87,9 @@ int main(int argc, char** argv) {
   std::printf("load            %.3f s\n", load_sec);
   std::printf("tree + moments  %.3f s   (%zu nodes, depth %u)\n", model.timings().tree_seconds,
               model.triangle_tree().bvh.nodes.size(), model.triangle_tree().bvh.depth);
-  std::printf("boundary + tree %.3f s\n\n", model.timings().boundary_seconds);
+  std::printf("boundary + tree %.3f s\n", model.timings().boundary_seconds);
+  std::printf("sheets          %.3f s   (%u of %zu triangles are sheets for w* = %g)\n\n", model.timings().sheet_seconds,
+              model.sheet_tree().view().triangle_count, tris, double(model.sheet_level()));
 
   const std::vector<vec3> points = point_mix(box, count, seed);
   std::vector<PointResult> results, reference;
@@ -118,7 +120,12 @@ int main(int argc, char** argv) {
                         {"w + grad, order 2", 2, kFieldW | kFieldGradient},
                         {"w + grad + Hessian, order 2", 2, kFieldW | kFieldGradient | kFieldHessian},
                         {"unsigned distance", 2, kFieldUnsignedDistance},
-                        {"boundary distance", 2, kFieldBoundaryDistance}};
+                        {"boundary distance", 2, kFieldBoundaryDistance},
+                        {"signed distance (sdf)", 2, kFieldSignedDistance},
+                        {"pseudo-SDF (sdf1, sdf2)", 2, kFieldPseudoDistance},
+                        {"sheet distance", 2, kFieldSheetDistance},
+                        {"Harnack lower bound", 2, kFieldHarnackBound},
+                        {"Newton projection", 2, kFieldProjection}};
   std::vector<double> max_err;
   for (const Mode& m : modes) {
     QueryRequest request;
@@ -139,9 +146,10 @@ int main(int argc, char** argv) {
     if (i > 0 && !std::isnan(max_err[i - 1])) std::printf(" %14.3g", max_err[i - 1]);
     std::printf("\n");
   }
-  const double w1 = rows[2].rate(), w2 = rows[3].rate(), wgh = rows[5].rate();
+  const double w1 = rows[2].rate(), w2 = rows[3].rate(), wgh = rows[5].rate(), sdf = rows[8].rate();
   std::printf("\nw+grad+H / w (order 2): %.3f   order-1 w / brute force: %.4g   order-2 w / brute force: %.4g\n",
               wgh / w2, w1 / base, w2 / base);
+  std::printf("sdf / w (order 2): %.3f (target >= 0.3)\n", sdf / w2);
   std::printf("(max |dw| is over the %zu brute-force points, beta = %g)\n", brute_n, beta);
   return 0;
 }

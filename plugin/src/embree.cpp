@@ -32,7 +32,9 @@ void set_error(std::string message) { g_last_error = std::move(message); }
 
 GWNRTMesh build(Mesh mesh, const std::string& source) {
   auto* out = new GWNRTMeshTy;
-  if (Status s = GwnModel::build(std::move(mesh), out->model); !s.ok()) {
+  BuildOptions build;
+  build.classify_sheets = false;  // only traced: no signed distances
+  if (Status s = GwnModel::build(std::move(mesh), out->model, build); !s.ok()) {
     set_error(source + ": " + s.message());
     delete out;
     return nullptr;

@@ -63,8 +63,10 @@ TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> sel
 // the other triangles' w, w_o, is continuous there, so the two sides carry w_o ± 1/2 and the
 // triangle is a piece of S = ∂{w > w*} when they straddle w*: |w_o − w*| < 1/2. (Equivalently,
 // the side the normal points to, w_o − 1/2, lies in (w* − 1, w*).) w_o is taken at the centroid,
-// once per triangle: per input triangle, NaN for the zero-area ones (never sheets).
-std::vector<float> other_triangles_winding(const TriangleTree& tree, size_t triangle_count, float beta);
+// once per triangle. This evaluates it at the centroids of the leaf-order triangles `leaves`
+// of `tree`, into out[input index].
+void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
+                             std::span<float> out);
 GWNRT_HD inline bool is_sheet(float other_winding, float level) {
   return fabsf(other_winding - level) < 0.5f;  // false for NaN
 }
@@ -73,7 +75,12 @@ SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_lea
 struct BuildOptions {
   uint32_t max_leaf_triangles = 4;
   uint32_t max_leaf_segments = 4;
-  float sheet_level = 0.5f;  // w* of the sheet tree built with the model (set_sheet_level changes it)
+  // Classify the sheets for w* = sheet_level at build (set_sheet_level changes the level later).
+  // It costs about what ten tree builds do (a w evaluation at every centroid; 2 s for 871k
+  // triangles on 2 cores): a model only traced (the Embree plugin) can skip it, and then
+  // refuses the sdf and sheet-distance queries.
+  bool classify_sheets = true;
+  float sheet_level = 0.5f;
 };
 
 struct BuildTimings {
@@ -99,13 +106,15 @@ class GwnModel {
   std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
   const Aabb& bounds() const { return bounds_; }
   float surface_margin() const { return surface_margin_; }
-  // Sheets: per input triangle the other triangles' w at its centroid (computed once, at build),
-  // and the tree over the triangles that are sheets for sheet_level().
+  // Sheets: per input triangle the other triangles' w at its centroid (NaN for zero-area
+  // triangles), and the tree over the triangles that are sheets for sheet_level() (NaN when
+  // the sheets were not classified).
   std::span<const float> other_winding() const { return other_winding_; }
   const TriangleTree& sheet_tree() const { return sheets_; }
   float sheet_level() const { return sheet_level_; }
-  // Rebuilds the sheet tree for another w* (from the stored values: no w is evaluated). Not
-  // thread-safe with queries running on this model. Fails on a non-finite level.
+  // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
+  // is too coarse to decide) and rebuilds the sheet tree. Not thread-safe with queries running
+  // on this model. Fails on a non-finite level.
   Status set_sheet_level(float level);
   ModelView view() const;
   const BuildTimings& timings() const { return timings_; }
@@ -122,8 +131,9 @@ class GwnModel {
   Aabb bounds_;
   float surface_margin_ = 0;
   std::vector<float> other_winding_;
+  std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
   TriangleTree sheets_;
-  float sheet_level_ = 0.5f;
+  float sheet_level_ = __builtin_nanf("");
   uint32_t max_leaf_triangles_ = 4;
   BuildTimings timings_;
 };

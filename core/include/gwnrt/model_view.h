@@ -41,7 +41,7 @@ struct ModelView {
   // The sheet triangles of M for the level sheet_level (model.h, is_sheet): the distance to
   // the sheet pieces of S is the distance to them.
   TriangleTreeView sheets;
-  float sheet_level = 0.5f;
+  float sheet_level = __builtin_nanf("");  // NaN: not classified (the tree is empty)
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M

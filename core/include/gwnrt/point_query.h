@@ -28,7 +28,7 @@ inline constexpr uint32_t kSheetFields = kFieldSignedDistance | kFieldSheetDista
 struct QueryRequest {
   uint32_t fields = kFieldW;
   TaylorOptions taylor;
-  bool exact = false;  // brute-force double sum instead of the tree (w, ∇w, H_w and the pseudo-SDF)
+  bool exact = false;  // brute-force double sum instead of the tree (w, ∇w, H_w, the pseudo-SDF, sdf's w)
   float level = 0.5f;  // w*: S = ∂{w > w*}
   NewtonOptions newton;
 };
@@ -49,18 +49,22 @@ struct PointResult {
 
 GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x, const QueryRequest& request) {
   PointResult r;
-  const bool want_pseudo = request.fields & (kFieldSignedDistance | kFieldPseudoDistance);
+  const bool want_pseudo = request.fields & kFieldPseudoDistance;
   const bool want_gradient = want_pseudo || (request.fields & kFieldGradient);
   const bool want_hessian = want_pseudo || (request.fields & kFieldHessian);
-  if (want_pseudo || (request.fields & (kFieldW | kFieldGradient | kFieldHessian))) {
+  const bool want_sample = want_pseudo || (request.fields & (kFieldW | kFieldGradient | kFieldHessian)) ||
+                           (request.exact && (request.fields & kFieldSignedDistance));
+  if (want_sample) {
+    // With sdf as well, the sample comes with everything sdf might need, so it is taken once.
+    const bool full = want_hessian || (request.fields & kFieldSignedDistance);
     if (request.exact) {
-      const WindingSampleExact s = winding_number_exact(model.triangles, x, want_gradient, want_hessian);
+      const WindingSampleExact s = winding_number_exact(model.triangles, x, want_gradient || full, full);
       r.w = float(s.w);
       r.gradient = vec3(s.gradient);
       r.hessian = {float(s.hessian.xx), float(s.hessian.xy), float(s.hessian.xz),
                    float(s.hessian.yy), float(s.hessian.yz), float(s.hessian.zz)};
     } else {
-      const WindingSample s = winding_number(model.triangles, x, request.taylor, want_gradient, want_hessian);
+      const WindingSample s = winding_number(model.triangles, x, request.taylor, want_gradient || full, full);
       r.w = s.w;
       r.gradient = s.gradient;
       r.hessian = s.hessian;
@@ -68,17 +72,15 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
   }
   const WindingSample sample{r.w, r.gradient, r.hessian};
   if (request.fields & kFieldSignedDistance) {
-    r.sdf = signed_distance(model, x, request.level, request.taylor.beta, sample);
-  } else {
-    if (request.fields & kFieldPseudoDistance) {
-      r.sdf.first_order = pseudo_distance(r.w, r.gradient, request.level);
-      r.sdf.second_order = curvature_corrected_distance(r.w, r.gradient, r.hessian, request.level);
-    }
-    if (request.fields & kFieldSheetDistance) {
-      const NearestPrimitive n = unsigned_distance(model.sheets, x);
-      r.sdf.sheet_distance = n.distance;
-      r.sdf.sheet_triangle = n.primitive;
-    }
+    r.sdf = signed_distance(model, x, request.level, request.taylor, want_sample ? &sample : nullptr);
+  } else if (request.fields & kFieldSheetDistance) {
+    const NearestPrimitive n = unsigned_distance(model.sheets, x);
+    r.sdf.sheet_distance = n.distance;
+    r.sdf.sheet_triangle = n.primitive;
+  }
+  if (want_pseudo) {
+    r.sdf.first_order = pseudo_distance(r.w, r.gradient, request.level);
+    r.sdf.second_order = curvature_corrected_distance(r.w, r.gradient, r.hessian, request.level);
   }
   if (request.fields & kFieldProjection)
     r.projection = project_onto_surface(model, x, request.level, request.taylor, request.newton);

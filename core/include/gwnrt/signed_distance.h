@@ -8,6 +8,7 @@
 #include "gwnrt/harnack.h"
 #include "gwnrt/model_view.h"
 #include "gwnrt/phase.h"
+#include "gwnrt/surface_trace.h"
 #include "gwnrt/winding_number.h"
 
 namespace gwnrt {
@@ -97,18 +98,43 @@ GWNRT_HD inline SurfaceProjection project_onto_surface(const ModelView& m, const
   }
 }
 
-// A lower bound on the distance from x to S. S lies on M (sheets) or on the level set
-// {φ = w* mod 1} off M (smooth pieces; φ = w mod 1 is continuous across M). The ball of radius
-// dist(x, M) holds no point of M; the ball of radius level_free_radius (harnack.h: Harnack's
-// bound for the lift of φ, harmonic on the ball since the ball avoids ∂M, and the Lipschitz
-// bound from the Biot–Savart field) holds no point where φ = w* mod 1. The smaller ball
-// therefore holds no point of S: ρ(x) <= dist(x, S). For a closed mesh φ is constant and ρ is
-// the distance to M (or 0 when w* is a whole number, which every point's φ equals).
-GWNRT_HD inline float harnack_lower_bound(const ModelView& m, const vec3& x, float level, float beta,
-                                          float mesh_distance) {
+// A lower bound on the distance from x to the smooth pieces of S for level w*: they lie in the
+// march boxes (surface_trace.h: where w_C can reach a level at all), so the distance to the
+// nearest box; +inf when there are no smooth pieces (a closed mesh).
+GWNRT_HD inline float smooth_piece_distance_bound(const ModelView& m, float level, const vec3& x) {
+  float d2 = kInfinity;
+  for (uint32_t r = 0; r < march_box_count(m, level); ++r) {
+    const Aabb box = march_box(m, level, r);
+    const vec3 outside = glm::max(glm::max(box.lo - x, x - box.hi), vec3(0.0f));
+    d2 = min_of(d2, glm::dot(outside, outside));
+  }
+  return sqrtf(d2);
+}
+
+// A lower bound on the distance from x to the smooth pieces of S: they lie on the level set
+// {φ = w* mod 1}, which no point of the ball of radius level_free_radius (harnack.h: Harnack's
+// bound for the lift of φ, harmonic on the ball since the ball avoids ∂M, and the Lipschitz bound
+// from the Biot–Savart field) reaches, nor any point closer than the march boxes
+// (smooth_piece_distance_bound). `known_bound` is a distance below which the answer is not
+// needed: when the boxes are already that far, φ is not evaluated.
+GWNRT_HD inline float level_set_distance_bound(const ModelView& m, const vec3& x, float level, float beta,
+                                               float known_bound = 0.0f) {
+  const float boxes = smooth_piece_distance_bound(m, level, x);
+  // A closed mesh (no cone) has no smooth pieces: w is a whole number off M.
+  if (m.cone.triangle_count == 0 || (boxes >= known_bound && known_bound > 0.0f)) return boxes;
   const PhaseSample p = sample_phase(m, x, beta, false);
   const LevelBracket levels = bracket_levels(p.phi, level - floorf(level));
-  return min_of(level_free_radius(p.boundary_distance, p.gradient_bound, p.phi, levels), mesh_distance);
+  return fmaxf(level_free_radius(p.boundary_distance, p.gradient_bound, p.phi, levels), boxes);
+}
+
+// A lower bound on the distance from x to S. S lies on M (sheets) or on the level set
+// {φ = w* mod 1} off M (smooth pieces; φ = w mod 1 is continuous across M). The ball of radius
+// dist(x, M) holds no point of M, the ball of radius level_set_distance_bound no point of the
+// level set; the smaller holds no point of S: ρ(x) <= dist(x, S). For a closed mesh (no
+// smooth pieces) ρ is the distance to M.
+GWNRT_HD inline float harnack_lower_bound(const ModelView& m, const vec3& x, float level, float beta,
+                                          float mesh_distance) {
+  return min_of(level_set_distance_bound(m, x, level, beta, mesh_distance), mesh_distance);
 }
 
 // Which estimate gave the signed distance.
@@ -120,46 +146,64 @@ enum class DistancePiece : uint32_t {
 
 struct SignedDistance {
   float distance = kInfinity;       // sdf: negative inside {w > w*}
-  float first_order = kInfinity;    // sdf1 = d₁
-  float second_order = kInfinity;   // sdf2 = d₂
+  // sdf1 = d₁ and sdf2 = d₂; NaN where signed_distance did not need them (no smooth piece of S
+  // can be nearer than the sheets; d₂ also where |d₁| >= 2 × the sheet distance): ask for them
+  // with kFieldPseudoDistance.
+  float first_order = kInfinity;
+  float second_order = kInfinity;
   float sheet_distance = kInfinity; // unsigned, to the sheet triangles (+inf when there are none)
   uint32_t sheet_triangle = kEmptyLane;
   DistancePiece piece = DistancePiece::kSheet;
 };
 
-// sdf(x) = sign(w* − w) · max(ρ(x), min(distance to the sheets, |d₂|)), from w, ∇w and H_w at x
-// (one traversal, `sample`). ρ only matters when it exceeds the estimate; as ρ <= dist(x, M) <=
-// the sheet distance, it is computed only where the smooth estimate wins and lies closer than
-// M, so most points pay for no more than the sample and the sheet distance.
-GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x, float level, float beta,
-                                               const WindingSample& sample) {
+// sdf(x) = sign(w* − w) · max(ρ(x), min(distance to the sheets, |d₂|)).
+//  - Where no smooth piece can be nearer than the nearest sheet (level_set_distance_bound, +inf
+//    for a closed mesh) the sheet distance is the answer and only w is evaluated, for the sign.
+//  - The smooth estimate competes only where |d₁| < 2 × the sheet distance: beyond, d₂ could win
+//    only with κd₁ > 4, where the quadratic model's correction would exceed its first-order
+//    term fourfold and it no longer describes w.
+//  - ρ only matters when it exceeds the estimate; as ρ <= dist(x, M) <= the sheet distance, it
+//    is computed only where the smooth estimate wins and lies closer than M.
+// `sample`, when given, holds w, ∇w and H_w at x (a caller that needs them anyway); otherwise
+// they are evaluated here, only as far as needed: w alone, then ∇w, then H_w (a second
+// traversal, where d₂ must compete: rare, as smooth pieces win only close to them).
+GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x, float level,
+                                               const TaylorOptions& taylor, const WindingSample* sample = nullptr) {
   SignedDistance out;
-  out.first_order = pseudo_distance(sample.w, sample.gradient, level);
-  out.second_order = curvature_corrected_distance(sample.w, sample.gradient, sample.hessian, level);
   const NearestPrimitive sheet = unsigned_distance(m.sheets, x);
   out.sheet_distance = sheet.distance;
   out.sheet_triangle = sheet.primitive;
-  const float smooth = fabsf(out.second_order);
+  out.first_order = out.second_order = __builtin_nanf("");
+  if (!sample && level_set_distance_bound(m, x, level, taylor.beta, sheet.distance) >= sheet.distance) {
+    const float w = winding_number(m.triangles, x, taylor).w;
+    out.distance = copysignf(sheet.distance, level - w);
+    return out;
+  }
+  // w and ∇w first: d₁ decides whether d₂, and so H_w, is needed at all.
+  WindingSample s = sample ? *sample : winding_number(m.triangles, x, taylor, true, false);
+  out.first_order = pseudo_distance(s.w, s.gradient, level);
   float best = sheet.distance;
-  if (smooth < best) {
-    best = smooth;
-    out.piece = DistancePiece::kSmooth;
-    const float mesh_distance = unsigned_distance(m.triangles, x).distance;
-    if (best < mesh_distance) {
-      const float rho = harnack_lower_bound(m, x, level, beta, mesh_distance);
-      if (rho > best) {
-        best = rho;
-        out.piece = DistancePiece::kHarnackBound;
+  if (fabsf(out.first_order) < 2.0f * sheet.distance) {
+    if (!sample) s = winding_number(m.triangles, x, taylor, true, true);
+    out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
+    const float smooth = fabsf(out.second_order);
+    if (smooth < best) {
+      best = smooth;
+      out.piece = DistancePiece::kSmooth;
+      const float mesh_distance = unsigned_distance(m.triangles, x).distance;
+      if (best < mesh_distance) {
+        const float rho = harnack_lower_bound(m, x, level, taylor.beta, mesh_distance);
+        if (rho > best) {
+          best = rho;
+          out.piece = DistancePiece::kHarnackBound;
+        }
       }
     }
+  } else if (sample) {
+    out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
   }
-  out.distance = copysignf(best, level - sample.w);
+  out.distance = copysignf(best, level - s.w);
   return out;
-}
-
-GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x, float level,
-                                               const TaylorOptions& taylor) {
-  return signed_distance(m, x, level, taylor.beta, winding_number(m.triangles, x, taylor, true, true));
 }
 
 }  // namespace gwnrt

@@ -117,41 +117,37 @@ GWNRT_HD inline glm::vec<3, T> triangle_solid_angle_gradient(const glm::vec<3, T
          detail::EdgeField<T>(g2, g0).gradient();
 }
 
-// ∇Ω and the Hessian of Ω together (the Hessian is the x-derivative of each edge term; the
-// per-edge terms are not symmetric, their sum over the closed loop is, so the result is
-// symmetrised to remove round-off).
+// ∇Ω and the Hessian of Ω together. The Hessian is the x-derivative of each edge term,
+// ∂(c f/|c|²)/∂x = c ⊗ v + (f/|c|²) E with v = ∇f/|c|² − 2f/|c|⁴ (c × e) and E the matrix of
+// x ↦ e × x. Per edge that is not symmetric; the sum over the closed loop is. E is
+// antisymmetric, so it drops out of the symmetric part, and each edge adds only
+// ½(c vᵀ + v cᵀ): six entries instead of nine, and the round-off asymmetry is gone too.
 template <class T>
 GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                                       const glm::vec<3, T>& p2, const glm::vec<3, T>& x,
                                                       glm::vec<3, T>& gradient, Sym3<T>& hessian) {
   const glm::vec<3, T> g[3] = {p0 - x, p1 - x, p2 - x};
   gradient = glm::vec<3, T>(0);
-  T h[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  hessian = Sym3<T>{};
   for (int i = 0; i < 3; ++i) {
     const detail::EdgeField<T> edge(g[i], g[(i + 1) % 3]);
     if (edge.degenerate) continue;
     const T inv_c2 = T(1) / edge.c2;
-    gradient += edge.c * (edge.f * inv_c2);
-    // ∂ĝ/∂x = -(I - ĝĝᵀ)/|g|, so ∇f = (I - ĝ_iĝ_iᵀ)e/|g_i| - (I - ĝ_jĝ_jᵀ)e/|g_j|.
+    const T s = edge.f * inv_c2;
+    gradient += edge.c * s;
+    // ∂ĝ/∂x = -(I - ĝĝᵀ)/|g|, so ∇f = (I - ĝ_iĝ_iᵀ)e/|g_i| - (I - ĝ_jĝ_jᵀ)e/|g_j|;
+    // c(x) = const + e × x, so ∇(|c|²)/2 = c × e.
     const glm::vec<3, T> grad_f = (edge.e - edge.gi_hat * glm::dot(edge.gi_hat, edge.e)) * edge.inv_li -
                                   (edge.e - edge.gj_hat * glm::dot(edge.gj_hat, edge.e)) * edge.inv_lj;
-    // c(x) = const + e × x, so ∂c/∂x_n = e × ê_n and c·∂c/∂x_n = (c × e)_n.
-    const glm::vec<3, T> c_cross_e = glm::cross(edge.c, edge.e);
-    const T s = edge.f * inv_c2;
-    const T t = T(2) * edge.f * inv_c2 * inv_c2;
-    const T ex = edge.e.x, ey = edge.e.y, ez = edge.e.z;
-    // (e × ê_n)_m as a matrix E[m][n] = ε_{m j n} e_j.
-    const T E[3][3] = {{0, ez, -ey}, {-ez, 0, ex}, {ey, -ex, 0}};
-    for (int m = 0; m < 3; ++m)
-      for (int n = 0; n < 3; ++n)
-        h[m][n] += grad_f[n] * edge.c[m] * inv_c2 + s * E[m][n] - t * edge.c[m] * c_cross_e[n];
+    const glm::vec<3, T> v = (grad_f - glm::cross(edge.c, edge.e) * (T(2) * s)) * inv_c2;
+    const glm::vec<3, T>& c = edge.c;
+    hessian.xx += c.x * v.x;
+    hessian.yy += c.y * v.y;
+    hessian.zz += c.z * v.z;
+    hessian.xy += T(0.5) * (c.x * v.y + v.x * c.y);
+    hessian.xz += T(0.5) * (c.x * v.z + v.x * c.z);
+    hessian.yz += T(0.5) * (c.y * v.z + v.y * c.z);
   }
-  hessian.xx = h[0][0];
-  hessian.yy = h[1][1];
-  hessian.zz = h[2][2];
-  hessian.xy = T(0.5) * (h[0][1] + h[1][0]);
-  hessian.xz = T(0.5) * (h[0][2] + h[2][0]);
-  hessian.yz = T(0.5) * (h[1][2] + h[2][1]);
 }
 
 }  // namespace gwnrt
