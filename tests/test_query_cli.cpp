@@ -231,6 +231,133 @@ TEST_F(QueryCliTest, MalformedPointsNameTheLine) {
   }
 }
 
+// A small open mesh (the upper half of a unit sphere, 8 rings of 32 segments, outward) written
+// as OBJ: S is the shell (sheets) plus the flat disk that closes it (a smooth piece), so the
+// points below reach every kind of signed-distance answer.
+std::string write_hemisphere_obj() {
+  const std::string path = temp_path("hemisphere.obj");
+  std::ofstream out(path);
+  constexpr int kRings = 8, kSegments = 32;
+  out << "v 0 0 1\n";
+  for (int i = 1; i <= kRings; ++i) {
+    const double theta = 0.5 * kPi * i / kRings;
+    const double r = i == kRings ? 1.0 : std::sin(theta), z = i == kRings ? 0.0 : std::cos(theta);
+    for (int j = 0; j < kSegments; ++j) {
+      const double phi = 2.0 * kPi * j / kSegments;
+      out << "v " << float(r * std::cos(phi)) << " " << float(r * std::sin(phi)) << " " << float(z) << "\n";
+    }
+  }
+  auto ring = [&](int i, int j) { return 2 + (i - 1) * kSegments + (j % kSegments); };  // OBJ: 1-based
+  for (int j = 0; j < kSegments; ++j) out << "f 1 " << ring(1, j) << " " << ring(1, j + 1) << "\n";
+  for (int i = 1; i < kRings; ++i)
+    for (int j = 0; j < kSegments; ++j) {
+      out << "f " << ring(i, j) << " " << ring(i + 1, j) << " " << ring(i + 1, j + 1) << "\n";
+      out << "f " << ring(i, j) << " " << ring(i + 1, j + 1) << " " << ring(i, j + 1) << "\n";
+    }
+  return path;
+}
+
+// Rows as text cells: sdf_piece is a word, not a number.
+std::vector<std::vector<std::string>> csv_cells(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream ls(line);
+    while (std::getline(ls, cell, ',')) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+float cell_float(const std::string& c) {
+  char* end = nullptr;
+  const float v = std::strtof(c.c_str(), &end);
+  EXPECT_EQ(*end, '\0') << "bad CSV cell '" << c << "'";
+  return v;
+}
+
+TEST_F(QueryCliTest, SignedDistanceFieldsMatchLibraryAtAnyLevel) {
+  const std::string mesh = write_hemisphere_obj();
+  const std::string points_file = temp_path("sdf_points.txt");
+  // Above the disk's centre (smooth, inside), above the pole (sheet, outside), below the disk
+  // (smooth, outside), inside the dome near the shell (sheet), beside the rim.
+  const std::vector<vec3> points = {
+      {0.1f, 0.2f, 0.05f}, {0.0f, 0.0f, 1.2f}, {0.3f, -0.2f, -0.1f}, {0.5f, 0.0f, 0.8f}, {1.1f, 0.0f, 0.02f}};
+  {
+    std::ofstream out(points_file);
+    for (const vec3& p : points) out << p.x << " " << p.y << " " << p.z << "\n";
+  }
+  Mesh loaded;
+  ASSERT_TRUE(load_mesh(mesh, loaded).ok());
+  GwnModel model = test::build_model(loaded);
+
+  const std::vector<std::string> expected_header = {"x",      "y",      "z",      "sdf",        "sdf_piece",
+                                                    "sdf1",   "sdf2",   "sheet_dist", "proj_x", "proj_y",
+                                                    "proj_z", "proj_iters", "proj_converged", "hbound"};
+  for (const float level : {0.5f, 0.3f}) {
+    std::string args = quote(mesh) + " --points " + quote(points_file) + " --fields sdf,sdf1,sdf2,sheet_dist,proj,hbound";
+    if (level != 0.5f) args += " --level 0.3";
+    const RunResult r = run_query(binary_, args);
+    ASSERT_TRUE(r.exited);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::vector<std::string>> rows = csv_cells(r.out);
+    ASSERT_EQ(rows.size(), points.size() + 1);
+    EXPECT_EQ(rows[0], expected_header);
+
+    // The library, with the request the program makes: bit-identical (shortest round-trip
+    // printing), the piece by name.
+    ASSERT_TRUE(model.set_sheet_level(level).ok());
+    QueryRequest request;
+    request.fields = kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance | kFieldProjection | kFieldHarnackBound;
+    request.level = level;
+    std::vector<PointResult> e(points.size());
+    ASSERT_TRUE(evaluate_points(model, points, request, e).ok());
+    const char* piece_names[] = {"sheet", "smooth", "bound"};
+    std::vector<std::string> pieces;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const std::vector<std::string>& row = rows[i + 1];
+      ASSERT_EQ(row.size(), expected_header.size()) << "row " << i;
+      EXPECT_EQ(cell_float(row[0]), points[i].x);
+      EXPECT_EQ(cell_float(row[3]), e[i].sdf.distance) << "row " << i << " level " << level;
+      EXPECT_EQ(row[4], piece_names[unsigned(e[i].sdf.piece)]) << "row " << i;
+      EXPECT_EQ(cell_float(row[5]), e[i].sdf.first_order) << "row " << i;
+      EXPECT_EQ(cell_float(row[6]), e[i].sdf.second_order) << "row " << i;
+      EXPECT_EQ(cell_float(row[7]), e[i].sdf.sheet_distance) << "row " << i;
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(cell_float(row[8 + a]), e[i].projection.point[a]) << "row " << i;
+      EXPECT_EQ(cell_float(row[11]), float(e[i].projection.iterations)) << "row " << i;
+      EXPECT_EQ(row[12], e[i].projection.converged ? "1" : "0") << "row " << i;
+      EXPECT_EQ(cell_float(row[13]), e[i].harnack_bound) << "row " << i;
+      pieces.push_back(row[4]);
+    }
+    if (level == 0.5f) {
+      // Independent of the library: above the disk's centre, sdf ≈ -z (the disk is S there); above
+      // the pole, 0.2 outside the shell (the pole is a vertex at radius 1).
+      EXPECT_NEAR(cell_float(rows[1][3]), -0.05f, 2e-3f);
+      EXPECT_EQ(rows[1][4], "smooth");
+      EXPECT_NEAR(cell_float(rows[2][3]), 0.2f, 1e-6f);
+      EXPECT_EQ(rows[2][4], "sheet");
+      EXPECT_EQ(rows[1][12], "1");  // Newton reaches the disk from just above it
+      EXPECT_EQ(rows[2][12], "0");  // and cannot from above the shell
+    }
+  }
+  std::remove(mesh.c_str());
+  std::remove(points_file.c_str());
+}
+
+TEST_F(QueryCliTest, BadLevelIsRefused) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields sdf";
+  for (const std::string bad : {"nan", "inf", "-inf", "abc", "1e30", ""}) {
+    const RunResult r = run_query(binary_, base + " --level " + quote(bad));
+    EXPECT_TRUE(r.exited) << bad;
+    EXPECT_NE(r.exit_code, 0) << "--level '" << bad << "'";
+    EXPECT_NE(r.err.find("level"), std::string::npos) << "--level '" << bad << "': " << r.err;
+    EXPECT_TRUE(r.out.empty()) << bad;
+  }
+}
+
 TEST_F(QueryCliTest, CudaDeviceNeverCrashes) {
   const RunResult r =
       run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --device cuda");

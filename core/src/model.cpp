@@ -114,21 +114,24 @@ Status GwnModel::set_sheet_level(float level) {
     std::vector<uint32_t> leaves(n);
     for (uint32_t i = 0; i < n; ++i) leaves[i] = i;
     other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
+    sheet_jump_.assign(mesh_.triangles.size(), 0);
     other_winding_refined_.assign(mesh_.triangles.size(), 0);
-    other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, other_winding_);
+    other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, other_winding_, sheet_jump_);
   }
-  std::vector<uint32_t> ambiguous;  // leaf order
+  std::vector<uint32_t> ambiguous;  // leaf order: a side within kSheetAmbiguity of the level
   for (uint32_t i = 0; i < triangles_.triangle_ids.size(); ++i) {
     const uint32_t t = triangles_.triangle_ids[i];
-    if (!other_winding_refined_[t] && fabsf(fabsf(other_winding_[t] - level) - 0.5f) < kSheetAmbiguity) {
+    const float half = 0.5f * float(std::abs(int(sheet_jump_[t])));
+    if (!other_winding_refined_[t] && (fabsf(other_winding_[t] - half - level) < kSheetAmbiguity ||
+                                       fabsf(other_winding_[t] + half - level) < kSheetAmbiguity)) {
       ambiguous.push_back(i);
       other_winding_refined_[t] = 1;
     }
   }
-  other_triangles_winding(triangles_, ambiguous, kSheetBetaFine, other_winding_);
+  other_triangles_winding(triangles_, ambiguous, kSheetBetaFine, other_winding_, sheet_jump_);
   std::vector<uint32_t> sheets;
   for (uint32_t t = 0; t < other_winding_.size(); ++t)
-    if (is_sheet(other_winding_[t], level)) sheets.push_back(t);
+    if (is_sheet(other_winding_[t], level, sheet_jump_[t])) sheets.push_back(t);
   sheets_ = build_triangle_tree(mesh_, sheets, max_leaf_triangles_);
   sheet_level_ = level;
   return Status::Ok();

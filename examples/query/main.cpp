@@ -178,7 +178,16 @@ int main(int argc, char** argv) {
                "Brute-force double-precision reference instead of the tree (w, grad, hess, sdf1, sdf2; the sdf's w too)");
   app.add_option("--level", level, "Level w*: S = boundary of {w > w*} (sdf, sdf1, sdf2, sheet_dist, proj, hbound)")
       ->capture_default_str()
-      ->check(CLI::Range(-1.0e6f, 1.0e6f));
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            // CLI11's Range lets nan through.
+            float v = 0;
+            const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+            if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(std::fabs(v) <= 1.0e6f))
+              return "--level must be a number in [-1e6, 1e6], got '" + text + "'";
+            return std::string();
+          },
+          "LEVEL"));
   app.add_option("--newton-iterations", newton_iterations, "Newton projection (proj): iteration cap")
       ->capture_default_str()
       ->check(CLI::Range(0u, 100000u));

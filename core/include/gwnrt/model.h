@@ -61,14 +61,25 @@ TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> sel
 
 // Sheet classification (DESIGN §1, signed distance). Across a triangle w jumps by its own ±1;
 // the other triangles' w, w_o, is continuous there, so the two sides carry w_o ± 1/2 and the
-// triangle is a piece of S = ∂{w > w*} when they straddle w*: |w_o − w*| < 1/2. (Equivalently,
-// the side the normal points to, w_o − 1/2, lies in (w* − 1, w*).) w_o is taken at the centroid,
-// once per triangle. This evaluates it at the centroids of the leaf-order triangles `leaves`
-// of `tree`, into out[input index].
+// triangle is a piece of S = ∂{w > w*} when they straddle w*. (Equivalently, the side the normal
+// points to, w_o − 1/2, lies in (w* − 1, w*).) A stack of k coincident triangles (net count of
+// their orientations, a soup that repeats a face) makes w jump by k: the sides are w_o ± k/2,
+// with w_o the rest of the mesh, and k = 0 is no jump at all. w_o is taken at the centroid,
+// once per triangle.
+// This evaluates w_o and k at the centroids of the leaf-order triangles `leaves` of `tree`, into
+// out[input index] and jump[input index].
 void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
-                             std::span<float> out);
-GWNRT_HD inline bool is_sheet(float other_winding, float level) {
-  return fabsf(other_winding - level) < 0.5f;  // false for NaN
+                             std::span<float> out, std::span<int8_t> jump);
+// Sides within this of w* count as equal to it (the stored w_o is that accurate near the
+// threshold): then {w > w*} holds on the upper side only when it is really above, so a closed
+// mesh is all sheets for w* = 0 and none for w* = 1, not a coin toss.
+inline constexpr float kSheetSideTolerance = 1e-3f;
+// The sides lo = w_o − |k|/2 and hi = w_o + |k|/2 straddle w*: lo <= w* < hi. False for NaN
+// (zero-area triangles) and k = 0.
+GWNRT_HD inline bool is_sheet(float other_winding, float level, int jump = 1) {
+  const float half = 0.5f * float(jump < 0 ? -jump : jump);
+  const float at = level + kSheetSideTolerance;
+  return jump != 0 && other_winding - half <= at && other_winding + half > at;
 }
 SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size);
 
@@ -110,6 +121,7 @@ class GwnModel {
   // triangles), and the tree over the triangles that are sheets for sheet_level() (NaN when
   // the sheets were not classified).
   std::span<const float> other_winding() const { return other_winding_; }
+  std::span<const int8_t> sheet_jump() const { return sheet_jump_; }  // k per input triangle (is_sheet)
   const TriangleTree& sheet_tree() const { return sheets_; }
   float sheet_level() const { return sheet_level_; }
   // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
@@ -131,6 +143,7 @@ class GwnModel {
   Aabb bounds_;
   float surface_margin_ = 0;
   std::vector<float> other_winding_;
+  std::vector<int8_t> sheet_jump_;
   std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
   TriangleTree sheets_;
   float sheet_level_ = __builtin_nanf("");

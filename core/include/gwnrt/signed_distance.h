@@ -193,9 +193,14 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
   out.sheet_distance = sheet.distance;
   out.sheet_triangle = sheet.primitive;
   out.first_order = out.second_order = __builtin_nanf("");
-  if (!sample && level_set_distance_bound(m, x, level, taylor.beta, sheet.distance) >= sheet.distance) {
-    const float w = winding_number(m.triangles, x, taylor).w;
+  if (level_set_distance_bound(m, x, level, taylor.beta, sheet.distance) >= sheet.distance) {
+    // Whatever the caller already has, the answer here is the sheet distance.
+    const float w = sample ? sample->w : winding_number(m.triangles, x, taylor).w;
     out.distance = copysignf(sheet.distance, level - w);
+    if (sample) {
+      out.first_order = pseudo_distance(sample->w, sample->gradient, level);
+      out.second_order = curvature_corrected_distance(sample->w, sample->gradient, sample->hessian, level);
+    }
     return out;
   }
   // w and ∇w first: d₁ decides whether d₂, and so H_w, is needed at all.
