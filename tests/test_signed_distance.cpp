@@ -6,6 +6,7 @@
 // brute-force distances to triangles.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -152,7 +153,9 @@ QueryRequest sdf_request(uint32_t fields, float level = 0.5f, bool exact = false
 }
 
 std::string str(const vec3& x) {
-  return "(" + std::to_string(x.x) + ", " + std::to_string(x.y) + ", " + std::to_string(x.z) + ")";
+  char buf[96];  // (GCC 12 warns falsely, -Wrestrict, on the chain of string concatenations)
+  std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(x.x), double(x.y), double(x.z));
+  return buf;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -228,6 +231,13 @@ std::vector<double> reference_other_windings(const Mesh& mesh, const test::Refer
     out[t] = n == dvec3(0.0) ? std::numeric_limits<double>::quiet_NaN() : reference_other_winding(ref, mesh, t);
   }
   return out;
+}
+
+
+// A point uniform in the disk of radius `radius` about the origin (the hemisphere's rim disk).
+glm::vec2 uniform_in_disk(test::Random& rng, float radius) {
+  const float r = radius * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
+  return {r * std::cos(a), r * std::sin(a)};
 }
 
 TEST(Sheets, ClosedSphereEveryTriangleIsASheetWithOtherWindingOneHalf) {
@@ -492,9 +502,9 @@ TEST(SignedDistance, HemisphereNearDiskIsSmoothMinusZ) {
   test::Random rng(8);
   std::vector<vec3> points;
   for (int k = 0; k < 300; ++k) {
-    const float r = 0.4f * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
+    const glm::vec2 q = uniform_in_disk(rng, 0.4f);
     const float z = rng.uniform(0.02f, 0.15f) * (k % 2 ? 1.0f : -1.0f);
-    points.push_back({r * std::cos(a), r * std::sin(a), z});
+    points.push_back({q.x, q.y, z});
   }
   for (bool exact : {false, true}) {
     const std::vector<PointResult> res = evaluate(model, points, sdf_request(kFieldSignedDistance, 0.5f, exact));
@@ -717,8 +727,8 @@ TEST(SignedDistance, GradientHasUnitLengthNearS) {
   test::Random rng(14);
   std::vector<vec3> centres;
   for (int k = 0; k < 60; ++k) {
-    const float r = 0.4f * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
-    centres.push_back({r * std::cos(a), r * std::sin(a), rng.uniform(0.01f, 0.03f) * (k % 2 ? 1.0f : -1.0f)});
+    const glm::vec2 q = uniform_in_disk(rng, 0.4f);
+    centres.push_back({q.x, q.y, rng.uniform(0.01f, 0.03f) * (k % 2 ? 1.0f : -1.0f)});
   }
   for (int k = 0; k < 60; ++k) {
     const float theta = std::acos(rng.uniform(std::cos(50.0f * float(kPi) / 180.0f), 1.0f));
@@ -768,8 +778,8 @@ TEST(SignedDistance, NewtonProjectsOntoTheDisk) {
   test::Random rng(15);
   std::vector<vec3> points;
   for (int k = 0; k < 200; ++k) {
-    const float r = 0.5f * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
-    points.push_back({r * std::cos(a), r * std::sin(a), rng.uniform(-0.2f, 0.2f)});
+    const glm::vec2 q = uniform_in_disk(rng, 0.5f);
+    points.push_back({q.x, q.y, rng.uniform(-0.2f, 0.2f)});
   }
   QueryRequest request = sdf_request(kFieldProjection | kFieldW);
   const std::vector<PointResult> res = evaluate(model, points, request);
@@ -889,8 +899,8 @@ TEST(SignedDistance, HarnackBoundClampsTheSmoothEstimateNearTheDisk) {
   test::Random rng(17);
   std::vector<vec3> points;
   for (int k = 0; k < 2000; ++k) {
-    const float r = 0.6f * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
-    points.push_back({r * std::cos(a), r * std::sin(a), rng.uniform(1e-3f, 4e-3f) * (k % 2 ? 1.0f : -1.0f)});
+    const glm::vec2 q = uniform_in_disk(rng, 0.6f);
+    points.push_back({q.x, q.y, rng.uniform(1e-3f, 4e-3f) * (k % 2 ? 1.0f : -1.0f)});
   }
   const std::vector<PointResult> r =
       evaluate(model, points, sdf_request(kFieldSignedDistance | kFieldPseudoDistance | kFieldHarnackBound));
