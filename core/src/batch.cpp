@@ -31,14 +31,16 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
       !std::isfinite(n.tolerance) || !std::isfinite(n.max_step))
     return {StatusCode::kInvalidArgument,
             "Newton options: tolerance and max_step must be finite and > 0, mesh_fraction in (0, 1]"};
-  if (view && (request.fields & kSheetFields) && std::isnan(view->sheet_level))
-    return {StatusCode::kInvalidArgument,
-            "the signed and sheet distances need the model's sheets, and it was built without them "
-            "(BuildOptions::classify_sheets; GwnModel::set_sheet_level classifies them)"};
-  if (view && (request.fields & kSheetFields) && request.level != view->sheet_level)
-    return {StatusCode::kInvalidArgument, "level " + std::to_string(request.level) +
-                                              " asked for, but the model's sheets were classified for level " +
-                                              std::to_string(view->sheet_level) + " (GwnModel::set_sheet_level)"};
+  if (view && (request.fields & kSheetFields)) {
+    if (std::isnan(view->sheet_level))
+      return {StatusCode::kInvalidArgument,
+              "the signed and sheet distances need the model's sheets, and it was built without them "
+              "(BuildOptions::classify_sheets; GwnModel::set_sheet_level classifies them)"};
+    if (request.level != view->sheet_level)
+      return {StatusCode::kInvalidArgument, "level " + std::to_string(request.level) +
+                                                " asked for, but the model's sheets were classified for level " +
+                                                std::to_string(view->sheet_level) + " (GwnModel::set_sheet_level)"};
+  }
   return Status::Ok();
 }
 

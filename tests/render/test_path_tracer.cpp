@@ -39,9 +39,36 @@ SceneDesc furnace(float albedo, float environment) {
   return s;
 }
 
+// The mean over the pixels `select` accepts (given the pixel's channels: R, G, B, then the
+// AOVs) of their radiance (R+G+B)/3, and its standard error.
+struct PixelMean {
+  double mean = 0, stderr_ = 0;
+  size_t pixels = 0;
+};
+
+template <class Select>
+PixelMean pixel_mean(const PathRender& r, Select select) {
+  PixelMean out;
+  double sum = 0, sum2 = 0;
+  for (int y = 0; y < r.image.height(); ++y)
+    for (int x = 0; x < r.image.width(); ++x) {
+      const float* p = r.image.pixel(x, y);
+      if (!select(p)) continue;
+      const double l = (double(p[0]) + p[1] + p[2]) / 3.0;
+      sum += l;
+      sum2 += l * l;
+      ++out.pixels;
+    }
+  if (out.pixels == 0) return out;
+  const double n = double(out.pixels);
+  out.mean = sum / n;
+  out.stderr_ = std::sqrt(std::max(0.0, sum2 / n - out.mean * out.mean) / n);
+  return out;
+}
+
 struct FurnaceResult {
-  double sphere_mean = 0, sphere_stderr = 0, background_min = 1e30, background_max = -1e30;
-  size_t sphere_pixels = 0;
+  PixelMean sphere;
+  double background_min = 1e30, background_max = -1e30;
 };
 
 FurnaceResult render_furnace(float albedo, float environment, int spp) {
@@ -54,29 +81,19 @@ FurnaceResult render_furnace(float albedo, float environment, int spp) {
   settings.aovs = true;
   const PathRender r = render_paths(scene, settings);
   FurnaceResult out;
-  double sum = 0, sum2 = 0;
+  // Every sample of the pixel on the sphere (depth averaged over samples equals a full hit's
+  // only if all hit: compare with the pixel's own coverage through the albedo AOV).
+  out.sphere = pixel_mean(r, [&](const float* p) { return std::abs(p[3] - albedo) < 1e-6f && p[9] > 0.0f; });
   for (int y = 0; y < desc.camera.height; ++y)
     for (int x = 0; x < desc.camera.width; ++x) {
       const float* p = r.image.pixel(x, y);
       for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(p[c]));
-      const float depth = p[9];
-      // Every sample of the pixel on the sphere (depth averaged over samples equals a full hit's
-      // only if all hit: compare with the pixel's own coverage through the albedo AOV).
-      const bool all_sphere = std::abs(p[3] - albedo) < 1e-6f && depth > 0.0f;
-      const bool all_background = p[3] == 0.0f && depth == 0.0f;
-      const double l = (double(p[0]) + p[1] + p[2]) / 3.0;
-      if (all_sphere) {
-        sum += l;
-        sum2 += l * l;
-        ++out.sphere_pixels;
-      } else if (all_background) {
+      if (p[3] == 0.0f && p[9] == 0.0f) {  // all background
+        const double l = (double(p[0]) + p[1] + p[2]) / 3.0;
         out.background_min = std::min(out.background_min, l);
         out.background_max = std::max(out.background_max, l);
       }
     }
-  const double n = double(out.sphere_pixels);
-  out.sphere_mean = sum / n;
-  out.sphere_stderr = std::sqrt(std::max(0.0, sum2 / n - out.sphere_mean * out.sphere_mean) / n);
   return out;
 }
 
@@ -87,13 +104,13 @@ TEST(PathTracer, FurnaceConvexGwnSphereReflectsAlbedoTimesEnvironment) {
     const FurnaceResult r = render_furnace(albedo, environment, 64);
     std::printf("[ furnace albedo %.1f ] %zu sphere pixels: mean %.5f (expected %.5f, standard error %.2g); "
                 "background in [%.6f, %.6f]\n",
-                albedo, r.sphere_pixels, r.sphere_mean, double(albedo * environment), r.sphere_stderr,
+                albedo, r.sphere.pixels, r.sphere.mean, double(albedo * environment), r.sphere.stderr_,
                 r.background_min, r.background_max);
-    ASSERT_GT(r.sphere_pixels, 400u);
+    ASSERT_GT(r.sphere.pixels, 400u);
     // Unbiased: the mean over ~700 pixels of 64 samples lies within 5 standard errors of a·E,
     // and within 1% whatever the noise estimate says (a bias would show as a constant offset).
-    EXPECT_NEAR(r.sphere_mean, albedo * environment, std::max(5.0 * r.sphere_stderr, 1e-3));
-    EXPECT_NEAR(r.sphere_mean, albedo * environment, 0.01 * albedo * environment);
+    EXPECT_NEAR(r.sphere.mean, albedo * environment, std::max(5.0 * r.sphere.stderr_, 1e-3));
+    EXPECT_NEAR(r.sphere.mean, albedo * environment, 0.01 * albedo * environment);
     // The background is the environment itself, exactly.
     EXPECT_FLOAT_EQ(float(r.background_min), environment);
     EXPECT_FLOAT_EQ(float(r.background_max), environment);
@@ -124,25 +141,14 @@ TEST(PathTracer, FurnaceGlassGwnSphereIsInvisible) {
   settings.spp = 64;
   settings.max_depth = 32;
   settings.aovs = true;
-  const PathRender r = render_paths(scene, settings);
-  double sum = 0, sum2 = 0;
-  size_t pixels = 0;
-  for (int y = 0; y < s.camera.height; ++y)
-    for (int x = 0; x < s.camera.width; ++x) {
-      const float* p = r.image.pixel(x, y);
-      if (std::abs(p[3] - 0.25f) > 1e-6f || p[8] < 0.6f) continue;  // not all on the glass, or grazing
-      const double l = (double(p[0]) + p[1] + p[2]) / 3.0;
-      sum += l;
-      sum2 += l * l;
-      ++pixels;
-    }
-  ASSERT_GT(pixels, 250u);
-  const double n = double(pixels), mean = sum / n;
-  const double stderr_ = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
-  std::printf("[ glass furnace ] %zu glass pixels: mean %.5f (expected %.5f, standard error %.2g)\n", pixels, mean,
-              double(environment), stderr_);
-  EXPECT_NEAR(mean, environment, std::max(5.0 * stderr_, 1e-3));
-  EXPECT_NEAR(mean, environment, 0.01 * environment);
+  // Not all samples on the glass (albedo AOV), or grazing (normal AOV's z toward the camera).
+  const PixelMean glass = pixel_mean(render_paths(scene, settings),
+                                     [](const float* p) { return std::abs(p[3] - 0.25f) <= 1e-6f && p[8] >= 0.6f; });
+  ASSERT_GT(glass.pixels, 250u);
+  std::printf("[ glass furnace ] %zu glass pixels: mean %.5f (expected %.5f, standard error %.2g)\n", glass.pixels,
+              glass.mean, double(environment), glass.stderr_);
+  EXPECT_NEAR(glass.mean, environment, std::max(5.0 * glass.stderr_, 1e-3));
+  EXPECT_NEAR(glass.mean, environment, 0.01 * environment);
 }
 
 // A white diffuse GWN sphere under an image environment read from an EXR file through the
@@ -229,16 +235,9 @@ TEST(PathTracer, ImageEnvironmentLightsADiffuseSphereAsTheClosedFormSays) {
 
 // Mean radiance over the pixels that see `material` only (through the albedo AOV) of a render.
 double mean_radiance_on(const PathRender& r, float albedo, size_t& pixels) {
-  double sum = 0;
-  pixels = 0;
-  for (int y = 0; y < r.image.height(); ++y)
-    for (int x = 0; x < r.image.width(); ++x) {
-      const float* p = r.image.pixel(x, y);
-      if (std::abs(p[3] - albedo) > 1e-6f) continue;
-      sum += (double(p[0]) + p[1] + p[2]) / 3.0;
-      ++pixels;
-    }
-  return pixels ? sum / double(pixels) : 0.0;
+  const PixelMean m = pixel_mean(r, [&](const float* p) { return std::abs(p[3] - albedo) <= 1e-6f; });
+  pixels = m.pixels;
+  return m.mean;
 }
 
 // A square of side 2·h at height y, normal up (or down).

@@ -52,11 +52,12 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
   const bool want_pseudo = request.fields & kFieldPseudoDistance;
   const bool want_gradient = want_pseudo || (request.fields & kFieldGradient);
   const bool want_hessian = want_pseudo || (request.fields & kFieldHessian);
-  const bool want_sample = want_pseudo || (request.fields & (kFieldW | kFieldGradient | kFieldHessian)) ||
-                           (request.exact && (request.fields & kFieldSignedDistance));
+  const bool want_sdf = request.fields & kFieldSignedDistance;
+  // The exact mode's sdf takes w, ∇w and H_w from the exact sum; otherwise sdf evaluates them
+  // itself, only as far as it needs (mostly w alone), unless they are taken anyway.
+  const bool full = want_hessian || (request.exact && want_sdf);
+  const bool want_sample = full || (request.fields & (kFieldW | kFieldGradient));
   if (want_sample) {
-    // With sdf as well, the sample comes with everything sdf might need, so it is taken once.
-    const bool full = want_hessian || (request.fields & kFieldSignedDistance);
     if (request.exact) {
       const WindingSampleExact s = winding_number_exact(model.triangles, x, want_gradient || full, full);
       r.w = float(s.w);
@@ -71,16 +72,18 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
     }
   }
   const WindingSample sample{r.w, r.gradient, r.hessian};
-  if (request.fields & kFieldSignedDistance) {
-    r.sdf = signed_distance(model, x, request.level, request.taylor, want_sample ? &sample : nullptr);
-  } else if (request.fields & kFieldSheetDistance) {
-    const NearestPrimitive n = unsigned_distance(model.sheets, x);
-    r.sdf.sheet_distance = n.distance;
-    r.sdf.sheet_triangle = n.primitive;
-  }
-  if (want_pseudo) {
-    r.sdf.first_order = pseudo_distance(r.w, r.gradient, request.level);
-    r.sdf.second_order = curvature_corrected_distance(r.w, r.gradient, r.hessian, request.level);
+  if (want_sdf) {
+    r.sdf = signed_distance(model, x, request.level, request.taylor, full ? &sample : nullptr);  // also d₁, d₂
+  } else {
+    if (request.fields & kFieldSheetDistance) {
+      const NearestPrimitive n = unsigned_distance(model.sheets, x);
+      r.sdf.sheet_distance = n.distance;
+      r.sdf.sheet_triangle = n.primitive;
+    }
+    if (want_pseudo) {
+      r.sdf.first_order = pseudo_distance(r.w, r.gradient, request.level);
+      r.sdf.second_order = curvature_corrected_distance(r.w, r.gradient, r.hessian, request.level);
+    }
   }
   if (request.fields & kFieldProjection)
     r.projection = project_onto_surface(model, x, request.level, request.taylor, request.newton);

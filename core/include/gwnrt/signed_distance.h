@@ -76,6 +76,11 @@ GWNRT_HD inline SurfaceProjection project_onto_surface(const ModelView& m, const
     return out;
   }
   const float max_step = options.max_step * glm::length(m.bounds.hi - m.bounds.lo);
+  // |w| < |w*| farther than surface_margin·sqrt(1/(2|w*|)) from M's box (surface_margin is where
+  // |w| < 1/2): a point that leaves that box follows w toward 0 at infinity and will not come
+  // back to the level (w* = 0: no such box).
+  const float margin = m.surface_margin * max_of(1.0f, sqrtf(0.5f / fabsf(level)));
+  const vec3 lo = m.bounds.lo - margin, hi = m.bounds.hi + margin;
   vec3 x = start;
   for (uint32_t it = 0;; ++it) {
     const WindingSample s = winding_number(m.triangles, x, taylor, true, false);
@@ -94,11 +99,6 @@ GWNRT_HD inline SurfaceProjection project_onto_surface(const ModelView& m, const
     if (!(limit > 0.0f)) return out;  // on M
     if (length > limit) step *= limit / length;
     x += step;
-    // |w| < |w*| farther than surface_margin·sqrt(1/(2|w*|)) from M's box (surface_margin is
-    // where |w| < 1/2): a point that left that box follows w toward 0 at infinity and will not
-    // come back to the level (w* = 0: no such box).
-    const float margin = m.surface_margin * max_of(1.0f, sqrtf(0.5f / fabsf(level)));
-    const vec3 lo = m.bounds.lo - margin, hi = m.bounds.hi + margin;
     if (!(x.x >= lo.x && x.y >= lo.y && x.z >= lo.z && x.x <= hi.x && x.y <= hi.y && x.z <= hi.z)) {
       out.iterations = it + 1;
       return out;
@@ -193,23 +193,25 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
   out.sheet_distance = sheet.distance;
   out.sheet_triangle = sheet.primitive;
   out.first_order = out.second_order = __builtin_nanf("");
+  if (sample) {
+    out.first_order = pseudo_distance(sample->w, sample->gradient, level);
+    out.second_order = curvature_corrected_distance(sample->w, sample->gradient, sample->hessian, level);
+  }
   if (level_set_distance_bound(m, x, level, taylor.beta, sheet.distance) >= sheet.distance) {
     // Whatever the caller already has, the answer here is the sheet distance.
     const float w = sample ? sample->w : winding_number(m.triangles, x, taylor).w;
     out.distance = copysignf(sheet.distance, level - w);
-    if (sample) {
-      out.first_order = pseudo_distance(sample->w, sample->gradient, level);
-      out.second_order = curvature_corrected_distance(sample->w, sample->gradient, sample->hessian, level);
-    }
     return out;
   }
   // w and ∇w first: d₁ decides whether d₂, and so H_w, is needed at all.
   WindingSample s = sample ? *sample : winding_number(m.triangles, x, taylor, true, false);
-  out.first_order = pseudo_distance(s.w, s.gradient, level);
+  if (!sample) out.first_order = pseudo_distance(s.w, s.gradient, level);
   float best = sheet.distance;
   if (fabsf(out.first_order) < 2.0f * sheet.distance) {
-    if (!sample) s = winding_number(m.triangles, x, taylor, true, true);
-    out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
+    if (!sample) {
+      s = winding_number(m.triangles, x, taylor, true, true);
+      out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
+    }
     const float smooth = fabsf(out.second_order);
     if (smooth < best) {
       best = smooth;
@@ -223,8 +225,6 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
         }
       }
     }
-  } else if (sample) {
-    out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
   }
   out.distance = copysignf(best, level - s.w);
   return out;
