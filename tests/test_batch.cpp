@@ -13,7 +13,7 @@
 
 #include <tbb/global_control.h>
 
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
 namespace gwnrt {

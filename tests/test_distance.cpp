@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/distance.h"
+#include "gwnrt/field/distance.h"
 #include "test_util.h"
 
 namespace gwnrt {

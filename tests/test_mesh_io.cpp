@@ -19,7 +19,8 @@
 #include <utility>
 #include <vector>
 
-#include "gwnrt/mesh.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/io/mesh_io.h"
 
 namespace gwnrt {
 namespace {

@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/distance.h"
-#include "gwnrt/harnack.h"
-#include "gwnrt/model.h"
-#include "gwnrt/phase.h"
-#include "gwnrt/solid_angle.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/trace/harnack.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/trace/phase.h"
+#include "gwnrt/field/solid_angle.h"
+#include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -290,7 +290,7 @@ TEST(Phase, SegmentIntegralBound) {
     // As phase.h calls it: the products in double, rounded to float; the length rounded up (cone_segments).
     const float bound = segment_inverse_square_integral(
         float(glm::length(u) * glm::length(v)), float(glm::dot(u, v)), float(glm::dot(c, c)),
-        std::nextafter(float(glm::length(bf - af)), kInfinityF));
+        std::nextafter(float(glm::length(bf - af)), kInfinity));
     const double ratio = double(bound) / exact;
     ++kind_count[kind];
     // Lower side: the bound is exact in the limit α -> 0 (far segments, ratio 1 + α²/12), where
@@ -324,7 +324,7 @@ TEST(Phase, SegmentIntegralBound) {
   EXPECT_EQ(glm::dot(c, c), 0.0);
   EXPECT_EQ(segment_inverse_square_integral(float(glm::length(u) * glm::length(v)), float(glm::dot(u, v)),
                                             float(glm::dot(c, c)), glm::length(b - a)),
-            kInfinityF);
+            kInfinity);
 }
 
 // ---------------------------------------------------------------------------------------------

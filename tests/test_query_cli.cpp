@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "gwnrt/batch.h"
+#include "gwnrt/io/mesh_io.h"
 #include "cli_util.h"
 #include "test_util.h"
 

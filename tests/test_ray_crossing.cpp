@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/ray.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/ray.h"
+#include "gwnrt/trace/surface_trace.h"
 #include "test_util.h"
 
 namespace gwnrt {

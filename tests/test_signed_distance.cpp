@@ -12,7 +12,8 @@
 #include <vector>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/signed_distance.h"
+#include "gwnrt/sdf/sheets.h"
+#include "gwnrt/sdf/signed_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -15,8 +15,8 @@
 
 #include <tbb/parallel_for.h>
 
-#include "gwnrt/surface_trace.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/trace/surface_trace.h"
+#include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
 #ifdef GWNRT_HAVE_EMBREE

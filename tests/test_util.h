@@ -10,8 +10,9 @@
 #include <gtest/gtest.h>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
 #include "point_mix.h"
 
 namespace gwnrt::test {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
 namespace gwnrt {

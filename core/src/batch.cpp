@@ -51,8 +51,10 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
                                               std::to_string(results.size()) + " result slots"};
   const ModelView view = model_view(model);
   if (Status s = validate_request(request, &view); !s.ok()) return s;
-  parallel_map(points, results, 256, progress, [&](const vec3& x) { return evaluate_point(view, x, request); });
-  return Status::Ok();
+  return guard_status("evaluate_points", [&] {
+    parallel_map(points, results, 256, progress, [&](const vec3& x) { return evaluate_point(view, x, request); });
+    return Status::Ok();
+  });
 }
 
 Status validate_trace_options(const TraceOptions& options) {
@@ -76,8 +78,10 @@ Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceO
   if (Status s = validate_trace_options(options); !s.ok()) return s;
   const ModelView view = model_view(model);
   // Rays cost far more than points (and vary more), so chunks are smaller.
-  parallel_map(rays, hits, 64, progress, [&](const Ray& ray) { return trace_surface(view, ray, options); });
-  return Status::Ok();
+  return guard_status("trace_rays", [&] {
+    parallel_map(rays, hits, 64, progress, [&](const Ray& ray) { return trace_surface(view, ray, options); });
+    return Status::Ok();
+  });
 }
 
 }  // namespace gwnrt

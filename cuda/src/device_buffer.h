@@ -61,26 +61,4 @@ class DeviceBuffer {
   size_t size_ = 0;
 };
 
-template <class In, class Out, class Fn>
-__global__ void map_kernel(const In* in, size_t count, Fn fn, Out* out) {
-  const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i < count) out[i] = fn(in[i]);
-}
-
-// out[i] = fn(in[i]) on the device, one thread per item: copies `in` up, runs, copies `out`
-// down. Fn is a trivially copyable functor with a __device__ call operator.
-template <class In, class Out, class Fn>
-Status map_on_device(std::span<const In> in, std::span<Out> out, int block, Fn fn) {
-  if (in.empty()) return Status::Ok();
-  DeviceBuffer<In> d_in;
-  DeviceBuffer<Out> d_out;
-  if (Status s = d_in.upload(in.data(), in.size()); !s.ok()) return s;
-  if (Status s = d_out.allocate(in.size()); !s.ok()) return s;
-  const unsigned grid = unsigned((in.size() + block - 1) / block);
-  map_kernel<<<grid, block>>>(d_in.get(), in.size(), fn, d_out.get());
-  if (Status s = cuda_status(cudaGetLastError(), "kernel launch"); !s.ok()) return s;
-  if (Status s = cuda_status(cudaDeviceSynchronize(), "kernel execution"); !s.ok()) return s;
-  return d_out.download(out.data(), out.size());
-}
-
 }  // namespace gwnrt::cuda

@@ -1,7 +1,7 @@
 // Batch queries on the GPU: one thread per point, each running the core's evaluate_point.
-#include "device_buffer.h"
+#include "map_on_device.cuh"
 #include "gwnrt/cuda.h"
-#include "gwnrt/point_query.h"
+#include "gwnrt/sdf/point_query.h"
 
 namespace gwnrt::cuda {
 namespace {

@@ -1,8 +1,8 @@
 // Ray tracing on the GPU: one thread per ray, each running the core's trace_surface.
-#include "device_buffer.h"
+#include "map_on_device.cuh"
 #include "gwnrt/batch.h"
 #include "gwnrt/cuda.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::cuda {
 namespace {

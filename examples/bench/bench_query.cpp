@@ -13,8 +13,9 @@
 #include <tbb/info.h>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
 #include "point_mix.h"
 
 namespace {

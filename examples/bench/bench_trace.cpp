@@ -42,8 +42,9 @@
 #include "camera.h"
 #include "embree_ray.h"
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
 #include "load_model.h"
 
 namespace {

@@ -43,11 +43,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "gwnrt/distance.h"
-#include "gwnrt/harnack.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/surface_trace.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/trace/harnack.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/surface_trace.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt::examples {
 

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "gwnrt/bvh.h"
-#include "gwnrt/ray.h"
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/trace/ray.h"
 
 namespace gwnrt::examples {
 
@@ -31,7 +31,6 @@ struct PinholeCamera {
 // sphere fills the vertical field of view `fov_degrees` with a small margin.
 inline PinholeCamera frame_box(const Aabb& box, int width, int height, float azimuth = 30.0f, float elevation = 20.0f,
                                float fov_degrees = 40.0f) {
-  constexpr float kDegree = 3.14159265358979f / 180.0f;
   PinholeCamera cam;
   cam.width = width;
   cam.height = height;

@@ -4,7 +4,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "gwnrt/ray.h"
+#include "gwnrt/trace/ray.h"
 
 namespace gwnrt::examples {
 

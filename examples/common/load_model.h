@@ -5,8 +5,9 @@
 #include <string>
 #include <utility>
 
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/model.h"
 
 namespace gwnrt::examples {
 

@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "gwnrt/bvh.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::examples {
 

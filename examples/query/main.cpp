@@ -19,9 +19,10 @@
 #include <tbb/global_control.h>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
-#include "gwnrt/point_query.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/sdf/point_query.h"
 #include "csv_writer.h"
 #include "load_model.h"
 #include "point_io.h"

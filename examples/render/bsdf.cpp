@@ -31,7 +31,6 @@ namespace gwnrt::render {
 namespace {
 
 constexpr float kPiF = float(kPi);
-constexpr float kInvPiF = float(1.0 / kPi);
 // Below this roughness the conductor is a perfect mirror: α = roughness² < 1e-6 would make D a
 // spike too narrow for float directions to resolve.
 constexpr float kMirrorRoughness = 1e-3f;
@@ -158,7 +157,7 @@ Spectrum bsdf_eval(const Material& m, const vec3& wo, const vec3& wi) {
   switch (m.kind) {
     case MaterialKind::kDiffuse:
       if (!(wo.z > 0.0f) || !(wi.z > 0.0f)) return Spectrum(0.0f);
-      return m.albedo * kInvPiF;
+      return m.albedo * kInvPi;
     case MaterialKind::kConductor:
       if (is_mirror(m)) return Spectrum(0.0f);
       return ggx_eval(m, wo, wi).f;
@@ -170,7 +169,7 @@ float bsdf_pdf(const Material& m, const vec3& wo, const vec3& wi) {
   switch (m.kind) {
     case MaterialKind::kDiffuse:
       if (!(wo.z > 0.0f) || !(wi.z > 0.0f)) return 0.0f;
-      return wi.z * kInvPiF;
+      return wi.z * kInvPi;
     case MaterialKind::kConductor:
       if (is_mirror(m)) return 0.0f;
       return ggx_eval(m, wo, wi).pdf;
@@ -190,7 +189,7 @@ bool bsdf_sample(const Material& m, const vec3& wo, float u0, float u1, float u2
       const float z = sqrtf(fmaxf(0.0f, 1.0f - r2));
       if (!(z > 0.0f)) return false;  // u1 = 1 (outside the documented range)
       out.wi = vec3(r * cosf(phi), r * sinf(phi), z);
-      out.pdf = z * kInvPiF;
+      out.pdf = z * kInvPi;
       out.weight = m.albedo;  // (albedo/π) cos θ / (cos θ/π)
       return true;
     }

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "camera.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/surface_trace.h"
 #include "image.h"
 #include "shading.h"
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gwnrt/batch.h"
+#include "gwnrt/io/mesh_io.h"
 
 namespace gwnrt::render {
 namespace {

@@ -29,9 +29,9 @@
 
 #include "bsdf.h"
 #include "environment.h"
-#include "gwnrt/mesh.h"
+#include "gwnrt/geometry/mesh.h"
 #include "gwnrt/status.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::render {
 

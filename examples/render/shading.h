@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "gwnrt/hd.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::render {
 

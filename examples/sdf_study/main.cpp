@@ -44,8 +44,9 @@
 #include <tbb/parallel_for.h>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
+#include "gwnrt/sdf/sheets.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
 #include "load_model.h"
 #include "point_mix.h"
 

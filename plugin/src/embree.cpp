@@ -1,5 +1,6 @@
 // The Embree plugin: a gwnrt mesh as an Embree user geometry whose callbacks run trace_surface.
 #include "gwnrt/embree.h"
+#include "gwnrt/io/mesh_io.h"
 
 #include <atomic>
 #include <cstring>
@@ -10,9 +11,9 @@
 
 #include "embree_api.h"
 #include "gwnrt/batch.h"
-#include "gwnrt/mesh.h"
-#include "gwnrt/model.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/trace/surface_trace.h"
 
 struct GWNRTMeshTy {
   std::atomic<uint32_t> references{1};
@@ -30,17 +31,32 @@ thread_local std::string g_last_error;
 
 void set_error(std::string message) { g_last_error = std::move(message); }
 
+// The C API's boundary: runs body and, should it throw (an allocation failure, a size beyond
+// memory), records the error and returns `failed`. Nothing crosses into the C caller.
+template <class T, class Fn>
+T guard_c_api(const char* where, T failed, Fn&& body) noexcept {
+  T result = failed;
+  const Status s = guard_status(where, [&] {
+    result = body();
+    return Status::Ok();
+  });
+  if (!s.ok()) {
+    set_error(s.message());
+    return failed;
+  }
+  return result;
+}
+
 GWNRTMesh build(Mesh mesh, const std::string& source) {
-  auto* out = new GWNRTMeshTy;
+  auto out = std::make_unique<GWNRTMeshTy>();
   BuildOptions build;
   build.classify_sheets = false;  // only traced: no signed distances
   if (Status s = GwnModel::build(std::move(mesh), out->model, build); !s.ok()) {
     set_error(source + ": " + s.message());
-    delete out;
     return nullptr;
   }
   out->view = out->model.view();
-  return out;
+  return out.release();
 }
 
 // The user data of one geometry. Embree 3 tells a user geometry nothing when it is destroyed, so
@@ -221,6 +237,7 @@ TraceOptions trace_options(const GWNRTOptions& o) {
 extern "C" {
 
 GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* triangles, size_t triangleCount) {
+  return guard_c_api("gwnrtNewMesh", GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
   if ((vertexCount > 0 && !xyz) || (triangleCount > 0 && !triangles)) {
     set_error("gwnrtNewMesh: NULL vertex or triangle array");
     return nullptr;
@@ -232,9 +249,11 @@ GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* tri
   for (size_t t = 0; t < triangleCount; ++t)
     mesh.triangles[t] = uvec3(triangles[3 * t], triangles[3 * t + 1], triangles[3 * t + 2]);
   return build(std::move(mesh), "gwnrtNewMesh");
+  });
 }
 
 GWNRTMesh gwnrtLoadMesh(const char* path) {
+  return guard_c_api("gwnrtLoadMesh", GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
   if (!path) {
     set_error("gwnrtLoadMesh: NULL path");
     return nullptr;
@@ -245,6 +264,7 @@ GWNRTMesh gwnrtLoadMesh(const char* path) {
     return nullptr;
   }
   return build(std::move(mesh), path);
+  });
 }
 
 void gwnrtRetainMesh(GWNRTMesh mesh) {
@@ -270,6 +290,7 @@ void gwnrtInitOptions(GWNRTOptions* options) {
 }
 
 RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOptions* options) {
+  return guard_c_api("gwnrtNewGeometry", RTCGeometry(nullptr), [&]() -> RTCGeometry {
   if (!device || !mesh) {
     set_error(!device ? "gwnrtNewGeometry: NULL device" : "gwnrtNewGeometry: NULL mesh");
     return nullptr;
@@ -292,15 +313,17 @@ RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOption
     set_error("gwnrtNewGeometry: " + s.message());
     return nullptr;
   }
+  Aabb bounds = surface_bounds(mesh->view, trace);
+  if (!bounds.valid()) bounds = mesh->model.bounds();  // S is empty: any box will do
+  // The record first: adding it is what may throw, and until it exists nothing is held. Should
+  // Embree then fail, the record keeps its reference until the process ends, as all records do.
+  GeometryRecord* record = RecordRegistry::add({mesh, trace, bounds});
+  gwnrtRetainMesh(mesh);
   RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
   if (!geometry) {
     set_error("gwnrtNewGeometry: Embree could not create a user geometry (see the device's error)");
     return nullptr;
   }
-  gwnrtRetainMesh(mesh);
-  Aabb bounds = surface_bounds(mesh->view, trace);
-  if (!bounds.valid()) bounds = mesh->model.bounds();  // S is empty: any box will do
-  GeometryRecord* record = RecordRegistry::add({mesh, trace, bounds});
   rtcSetGeometryUserPrimitiveCount(geometry, 1);
   rtcSetGeometryUserData(geometry, record);
   embree_api::set_callbacks(geometry, bounds_callback, intersect_callback, occluded_callback);
@@ -308,6 +331,7 @@ RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOption
   // filters) commits it again, as any Embree geometry.
   rtcCommitGeometry(geometry);
   return geometry;
+  });
 }
 
 const char* gwnrtGetLastError(void) { return g_last_error.c_str(); }

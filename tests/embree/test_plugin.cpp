@@ -24,9 +24,9 @@
 #include "../test_util.h"
 #include "embree_ray.h"
 #include "camera.h"
-#include "gwnrt/distance.h"
+#include "gwnrt/field/distance.h"
 #include "gwnrt/embree.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt {
 namespace {
@@ -505,10 +505,20 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
   // Packets: exactly the single-ray results lane by lane; inactive lanes untouched.
   std::vector<RTCRayHit> in(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) in[i] = make_rayhit(rays[i], unsigned(i));
-  auto check_packets = [&](const std::vector<RTCRayHit>& out, SomeLanes lanes, int n) {
+  // Debian's Embree 3.13 on a CPU without AVX-512 traces some inactive lanes of rtcIntersect16
+  // (measured: 1011 of 2000 on an AVX2 EPYC, on its own triangle geometry just as on ours), so
+  // what the plugin owes is what Embree's triangles do: an inactive lane they leave untouched stays
+  // untouched, one that Embree traces anyway gets the single-ray answer.
+  auto check_packets = [&](const std::vector<RTCRayHit>& out, SomeLanes lanes, int n,
+                           const std::vector<RTCRayHit>& triangles_out) {
     size_t active = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
-      if (lanes(i)) {
+      if (!lanes(i) && !same_bits(triangles_out[i], inactive_lane(in[i]))) {
+        EXPECT_TRUE(same_bits(out[i], single[i])) << "rtcIntersect" << n << " inactive lane " << i
+                                                   << " traced by Embree as on its triangles\n"
+                                                   << describe(out[i]) << "\n"
+                                                   << describe(single[i]);
+      } else if (lanes(i)) {
         ++active;
         EXPECT_TRUE(same_bits(out[i], single[i])) << "rtcIntersect" << n << " lane " << i << "\n"
                                                    << describe(out[i]) << "\n"
@@ -520,16 +530,22 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
     EXPECT_GT(active, rays.size() / 2);
     EXPECT_LT(active, rays.size());
   };
-  check_packets(intersect_packets<4>(a.get(), in, SomeLanes{1}), SomeLanes{1}, 4);
-  check_packets(intersect_packets<8>(a.get(), in, SomeLanes{2}), SomeLanes{2}, 8);
-  check_packets(intersect_packets<16>(a.get(), in, SomeLanes{3}), SomeLanes{3}, 16);
+  check_packets(intersect_packets<4>(a.get(), in, SomeLanes{1}), SomeLanes{1}, 4,
+                intersect_packets<4>(b.get(), in, SomeLanes{1}));
+  check_packets(intersect_packets<8>(a.get(), in, SomeLanes{2}), SomeLanes{2}, 8,
+                intersect_packets<8>(b.get(), in, SomeLanes{2}));
+  check_packets(intersect_packets<16>(a.get(), in, SomeLanes{3}), SomeLanes{3}, 16,
+                intersect_packets<16>(b.get(), in, SomeLanes{3}));
 
   // Occlusion: occluded exactly when rtcIntersect found a hit; otherwise the ray is untouched.
   std::vector<RTCRay> rin(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) rin[i] = in[i].ray;
-  auto check_occluded = [&](const std::vector<RTCRay>& out, SomeLanes lanes, int n) {
+  // As for rtcIntersect16: an inactive lane that Embree traces on its triangles is checked as an
+  // active one.
+  auto check_occluded = [&](const std::vector<RTCRay>& out, SomeLanes lanes, int n,
+                            const std::vector<RTCRay>& triangles_out) {
     for (size_t i = 0; i < rays.size(); ++i) {
-      if (!lanes(i)) {
+      if (!lanes(i) && same_bits(triangles_out[i], rin[i])) {
         EXPECT_TRUE(same_bits(out[i], rin[i])) << "rtcOccluded" << n << " touched inactive lane " << i;
       } else if (is_hit(single[i])) {
         EXPECT_TRUE(is_occluded(out[i])) << "rtcOccluded" << n << " ray " << i << " " << describe(rays[i]);
@@ -540,9 +556,12 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
   };
   std::vector<RTCRay> one(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) one[i] = occluded1(a.get(), rays[i], nullptr, unsigned(i));
-  check_occluded(occluded_packets<4>(a.get(), rin, SomeLanes{4}), SomeLanes{4}, 4);
-  check_occluded(occluded_packets<8>(a.get(), rin, SomeLanes{5}), SomeLanes{5}, 8);
-  check_occluded(occluded_packets<16>(a.get(), rin, SomeLanes{6}), SomeLanes{6}, 16);
+  check_occluded(occluded_packets<4>(a.get(), rin, SomeLanes{4}), SomeLanes{4}, 4,
+                 occluded_packets<4>(b.get(), rin, SomeLanes{4}));
+  check_occluded(occluded_packets<8>(a.get(), rin, SomeLanes{5}), SomeLanes{5}, 8,
+                 occluded_packets<8>(b.get(), rin, SomeLanes{5}));
+  check_occluded(occluded_packets<16>(a.get(), rin, SomeLanes{6}), SomeLanes{6}, 16,
+                 occluded_packets<16>(b.get(), rin, SomeLanes{6}));
   for (size_t i = 0; i < rays.size(); ++i) {
     EXPECT_EQ(is_occluded(one[i]), is_hit(single[i])) << "rtcOccluded1 ray " << i << " " << describe(rays[i]);
     if (!is_hit(single[i])) {

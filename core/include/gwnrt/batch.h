@@ -5,9 +5,9 @@
 #include <atomic>
 #include <span>
 
-#include "gwnrt/model.h"
-#include "gwnrt/point_query.h"
-#include "gwnrt/surface_trace.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/sdf/point_query.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt {
 

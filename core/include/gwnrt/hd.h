@@ -24,8 +24,10 @@ using dvec3 = glm::dvec3;
 using uvec3 = glm::uvec3;
 
 inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr float kInvPi = float(1.0 / kPi);
 inline constexpr float kInv4Pi = float(0.25 / kPi);
-inline constexpr float kInfinityF = __builtin_huge_valf();
+inline constexpr float kDegree = float(kPi / 180.0);         // one degree in radians
+inline constexpr float kInfinity = __builtin_huge_valf();  // +inf, usable on the device
 
 // Symmetric 3x3 matrix stored as its six independent entries (xx, xy, xz, yy, yz, zz).
 template <class T>
@@ -86,6 +88,6 @@ GWNRT_HD inline float power_of_two_scale(float m) {
   return bits_float(0x7f000000u - exponent);
 }
 
-GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinityF && x != -kInfinityF; }
+GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinity && x != -kInfinity; }
 
 }  // namespace gwnrt

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/model.h"
+#include "gwnrt/geometry/model.h"
 
 namespace gwnrt::cuda {
 

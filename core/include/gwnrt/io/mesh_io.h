@@ -1,19 +1,13 @@
-// Triangle meshes: the owning container, loading from OBJ/PLY, and the load report.
+// Loading meshes from OBJ and PLY files (core/src/io/), and what loading found.
 #pragma once
 
 #include <cstddef>
 #include <string>
-#include <vector>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/geometry/mesh.h"
 #include "gwnrt/status.h"
 
 namespace gwnrt {
-
-struct Mesh {
-  std::vector<vec3> positions;
-  std::vector<uvec3> triangles;  // oriented: (a, b, c) counter-clockwise seen from the outside
-};
 
 // What loading found, for the user to read; none of it is an error.
 struct MeshLoadReport {
@@ -28,12 +22,5 @@ struct MeshLoadReport {
 // into triangles. Fails, naming the file and the line or element, on malformed content,
 // non-finite coordinates, out-of-range indices and meshes without triangles.
 Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report = nullptr);
-
-// Same checks for a mesh built in memory (coordinates finite, indices in range, not empty).
-// `source` names the mesh in messages.
-Status validate_mesh(const Mesh& mesh, const std::string& source = "mesh");
-
-// Zero-area test used everywhere a triangle is classified as degenerate (exact, in double).
-bool is_degenerate_triangle(const vec3& a, const vec3& b, const vec3& c);
 
 }  // namespace gwnrt

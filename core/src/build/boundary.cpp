@@ -8,7 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "gwnrt/model.h"
+#include "gwnrt/geometry/boundary.h"
 
 namespace gwnrt {
 namespace {
@@ -166,7 +166,7 @@ std::vector<ConeSegment> cone_segments(const TriangleTree& cone) {
     const double length2 = glm::dot(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]),
                                     dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
     // The length rounded up: the bound it enters must not shrink.
-    segments[t] = {std::nextafter(float(std::sqrt(length2)), kInfinityF), float(1.0 / length2)};
+    segments[t] = {std::nextafter(float(std::sqrt(length2)), kInfinity), float(1.0 / length2)};
   }
   return segments;
 }
@@ -186,35 +186,13 @@ std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone) {
       } else if (node.child[l] != kEmptyLane) {
         lane = self(self, node.child[l]);
       }
-      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinityF) : 0.0f;
+      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinity) : 0.0f;
       total += lane;
     }
     return total;
   };
   if (!cone.bvh.nodes.empty()) node_length(node_length, 0);
   return lengths;
-}
-
-SegmentTreeView SegmentTree::view() const {
-  return {bvh.view(), endpoints.data(), segment_ids.data(), uint32_t(segment_ids.size())};
-}
-
-SegmentTree build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size) {
-  const size_t n = endpoints.size() / 2;
-  std::vector<Aabb> bounds(n);
-  for (size_t s = 0; s < n; ++s) {
-    bounds[s].extend(endpoints[2 * s]);
-    bounds[s].extend(endpoints[2 * s + 1]);
-  }
-  SegmentTree tree;
-  tree.bvh = build_wide_bvh(bounds, max_leaf_size);
-  tree.segment_ids = tree.bvh.primitive_order;
-  tree.endpoints.resize(2 * n);
-  for (size_t i = 0; i < n; ++i) {
-    tree.endpoints[2 * i] = endpoints[2 * tree.segment_ids[i]];
-    tree.endpoints[2 * i + 1] = endpoints[2 * tree.segment_ids[i] + 1];
-  }
-  return tree;
 }
 
 }  // namespace gwnrt

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "gwnrt/hd.h"
+#include "gwnrt/status.h"
 
 namespace gwnrt {
 
@@ -111,6 +112,6 @@ struct WideBvh {
   BvhView view() const { return {nodes.data(), uint32_t(nodes.size())}; }
 };
 
-WideBvh build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size);
+Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out);
 
 }  // namespace gwnrt

@@ -2,11 +2,10 @@
 // boundary curve ∂M, by near-first traversal of the wide BVH. Host-and-device.
 #pragma once
 
-#include "gwnrt/bvh.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 
-inline constexpr float kInfinity = __builtin_huge_valf();  // +inf, usable on the device
 
 template <class T>
 struct ClosestPoint {

@@ -2,7 +2,7 @@
 // host-and-device functions take and what the CUDA backend fills with device pointers.
 #pragma once
 
-#include "gwnrt/bvh.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 

@@ -14,104 +14,15 @@
 // A closed mesh has no ∂M, so no Harnack steps: the trace is one walk over its crossings.
 #pragma once
 
-#include "gwnrt/harnack.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/phase.h"
-#include "gwnrt/ray.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/trace/harnack.h"
+#include "gwnrt/trace/march_regions.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/phase.h"
+#include "gwnrt/trace/ray.h"
+#include "gwnrt/trace/trace_types.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
-
-enum class TraceMode : uint32_t {
-  kWindingNumber = 0,  // S = ∂{w > level}: sheets and smooth pieces
-  kSolidAngle = 1,     // {Ω ≡ 4π·level mod 4π}: smooth pieces only (the paper's nonplanar polygons)
-};
-
-struct TraceOptions {
-  TraceMode mode = TraceMode::kWindingNumber;
-  float level = 0.5f;         // w*; in solid-angle mode Ω*/(4π) (2π ↔ 0.5)
-  float epsilon = 1e-5f;      // stopping distance, relative to the box diagonal of M
-  uint32_t max_steps = 4096;  // Harnack evaluations per ray
-  uint32_t max_crossings = 1u << 16;
-  float beta = 2.0f;          // accuracy of the multipole evaluation of φ on the cone
-  bool overstep = true;
-  bool exact = false;         // φ by the double brute-force sum over the cone (reference, slow)
-};
-
-enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
-
-struct RayHit {
-  bool hit = false;
-  bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
-  bool invalid = false;  // rejected input: non-finite numbers or a zero direction
-  HitKind kind = HitKind::kNone;
-  float t = kInfinity;   // in units of the ray's own direction
-  vec3 position{0.0f};
-  vec3 normal{0.0f};     // unit, outward: from {w > w*} toward {w < w*}
-  uint32_t triangle = kEmptyLane;  // input index, sheet hits
-  uint32_t steps = 0;      // Harnack evaluations of φ
-  uint32_t crossings = 0;  // triangle crossings walked
-};
-
-// Below this distance between 0 and the nearest level (w* near a whole number) the smooth
-// regions' bound is useless and the march covers M's box grown by ModelView::surface_margin.
-inline constexpr float kMinLevelDistance = 1e-3f;
-
-// Padding of M's box for the crossing walk, relative to its diagonal (plus an absolute floor for
-// flat meshes): far above float round-off of the crossing and clip computations.
-inline constexpr float kBoxPad = 1e-4f;
-
-// How far past a level round-off may carry a safe step, in φ: far above float ulps of φ, far
-// below the change of φ over the stopping distance.
-inline constexpr float kPhaseRoundOff = 1e-5f;
-inline constexpr float kBoxPadAbsolute = 1e-30f;
-
-// Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
-// the box is rounded differently from the box clip and may fall just outside it.
-GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
-  Aabb padded = m.bounds;
-  const vec3 pad(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute);
-  padded.lo -= pad;
-  padded.hi += pad;
-  return padded;
-}
-
-// Where the march may be needed for level w*: the smooth regions grown for δ = the distance from
-// 0 to the nearest level (SmoothRegion), or, for levels at whole numbers, where that bound is
-// useless, M's box grown by surface_margin. No smooth piece of S lies outside these boxes.
-GWNRT_HD inline uint32_t march_box_count(const ModelView& m, float level) {
-  if (m.cone.triangle_count == 0) return 0;
-  const float phase = level - floorf(level);
-  const float delta = min_of(phase, 1.0f - phase);
-  if (!(delta > kMinLevelDistance)) return 1u;
-  return m.smooth_region_count < kMaxSmoothRegions ? m.smooth_region_count : kMaxSmoothRegions;
-}
-
-GWNRT_HD inline Aabb march_box(const ModelView& m, float level, uint32_t r) {
-  const float phase = level - floorf(level);
-  const float delta = min_of(phase, 1.0f - phase);
-  Aabb box;
-  float grow;
-  if (delta > kMinLevelDistance) {
-    box = m.smooth_regions[r].box;
-    grow = sqrtf(m.smooth_regions[r].spread / (4.0f * float(kPi) * delta));
-  } else {  // levels at whole numbers: only |w| <= A/(4π d²) of the whole mesh bounds them
-    box = m.bounds;
-    grow = m.surface_margin;
-  }
-  box.lo -= vec3(grow);
-  box.hi += vec3(grow);
-  return box;
-}
-
-// A box holding all of S for these options (what an Embree bounds callback reports): M's box for
-// the sheets, the march boxes for the smooth pieces. Empty (not valid()) when S is.
-GWNRT_HD inline Aabb surface_bounds(const ModelView& m, const TraceOptions& options) {
-  Aabb box;
-  if (options.mode == TraceMode::kWindingNumber) box.extend(crossing_box(m));
-  for (uint32_t r = 0; r < march_box_count(m, options.level); ++r) box.extend(march_box(m, options.level, r));
-  return box;
-}
 
 namespace detail {
 
@@ -159,8 +70,7 @@ class SurfaceTracer {
     // and whether the ray's own start lies inside one of them.
     bool proven_regions = false, origin_inside = false;
     if (smooth_) {
-      const float delta = min_of(phase_, 1.0f - phase_);
-      proven_regions = delta > kMinLevelDistance;
+      proven_regions = level_distance(o_.level) > kMinLevelDistance;
       const uint32_t regions = march_box_count(m_, o_.level);
       for (uint32_t r = 0; r < regions; ++r) {
         const Aabb box = march_box(m_, o_.level, r);

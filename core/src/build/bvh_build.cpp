@@ -2,13 +2,14 @@
 // (depth <= log2 n), which is what multipole evaluation wants: compact clusters at every level.
 #include <algorithm>
 #include <atomic>
-#include <stdexcept>
+#include <limits>
+#include <string>
 
 #include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
 #include <tbb/task_group.h>
 
-#include "gwnrt/bvh.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 namespace {
@@ -34,11 +35,12 @@ class Builder {
     out_.nodes.resize(std::max<size_t>(1, n));
   }
 
-  void run() {
+  bool run() {
     next_node_ = 1;
     build(0, {0, uint32_t(bounds_.size())}, 1);
     out_.nodes.resize(next_node_.load());
     out_.depth = max_depth_.load();
+    return !too_deep_.load();
   }
 
  private:
@@ -68,7 +70,12 @@ class Builder {
     uint32_t prev = max_depth_.load();
     while (depth > prev && !max_depth_.compare_exchange_weak(prev, depth)) {
     }
-    if (depth > uint32_t(kMaxBvhDepth)) throw std::runtime_error("gwnrt: BVH deeper than kMaxBvhDepth");
+    // Median splits halve every range, so depth <= log2(n) + 1 <= 33 for 32-bit counts; deeper
+    // would overflow the traversal stacks, so it is refused rather than built.
+    if (depth > uint32_t(kMaxBvhDepth)) {
+      too_deep_ = true;
+      return {};
+    }
 
     // Split the largest part until there are four or none can be split.
     Range parts[kBvhWidth];
@@ -128,15 +135,19 @@ class Builder {
   std::vector<vec3> centroids_;
   std::atomic<uint32_t> next_node_{1};
   std::atomic<uint32_t> max_depth_{0};
+  std::atomic<bool> too_deep_{false};
 };
 
 }  // namespace
 
-WideBvh build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size) {
+Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out) {
   WideBvh bvh;
-  if (primitive_bounds.empty()) return bvh;
-  Builder(primitive_bounds, max_leaf_size, bvh).run();
-  return bvh;
+  if (primitive_bounds.size() > size_t(std::numeric_limits<uint32_t>::max()))
+    return {StatusCode::kInvalidArgument, "BVH build: more than 2^32 - 1 primitives"};
+  if (!primitive_bounds.empty() && !Builder(primitive_bounds, max_leaf_size, bvh).run())
+    return {StatusCode::kInternal, "BVH build: deeper than kMaxBvhDepth (" + std::to_string(kMaxBvhDepth) + ")"};
+  out = std::move(bvh);
+  return Status::Ok();
 }
 
 }  // namespace gwnrt

@@ -2,10 +2,10 @@
 // CUDA kernel both call, so the two backends cannot drift apart. Host-and-device.
 #pragma once
 
-#include "gwnrt/distance.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/signed_distance.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/sdf/signed_distance.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 

@@ -4,7 +4,8 @@
 #include <limits>
 #include <string>
 
-#include "gwnrt/model.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/sdf/sheets.h"
 
 namespace gwnrt {
 namespace {
@@ -63,23 +64,32 @@ std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vect
 }  // namespace
 
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
+  return guard_status("GwnModel::build", [&] { return build_unguarded(std::move(mesh), out, options); });
+}
+
+Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& options) {
+  if (options.max_leaf_triangles < 1 || options.max_leaf_triangles > kMaxLeafSize || options.max_leaf_segments < 1 ||
+      options.max_leaf_segments > kMaxLeafSize)
+    return {StatusCode::kInvalidArgument, "BuildOptions: max_leaf_triangles and max_leaf_segments must lie in [1, " +
+                                              std::to_string(kMaxLeafSize) + "]"};
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
   using clock = std::chrono::steady_clock;
   GwnModel model;
   model.mesh_ = std::move(mesh);
   auto t0 = clock::now();
-  model.triangles_ = build_triangle_tree(model.mesh_, options.max_leaf_triangles);
+  if (Status s = build_triangle_tree(model.mesh_, options.max_leaf_triangles, model.triangles_); !s.ok()) return s;
   // The tree leaves zero-area triangles out; with none left there is nothing to evaluate.
   if (model.triangles_.triangle_ids.empty())
     return {StatusCode::kInvalidMesh, "mesh: all " + std::to_string(model.mesh_.triangles.size()) +
                                           " triangles have zero area (nothing to evaluate)"};
   auto t1 = clock::now();
   model.boundary_ = extract_boundary(model.mesh_);
-  model.boundary_tree_ = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments);
+  if (Status s = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments, model.boundary_tree_); !s.ok())
+    return s;
   uint32_t loop_count = 0;
   const std::vector<uint32_t> loop_of_segment = boundary_loops(model.boundary_, loop_count);
   const Mesh cone = boundary_cone(model.boundary_, loop_of_segment, loop_count);
-  model.cone_ = build_triangle_tree(cone, options.max_leaf_triangles);
+  if (Status s = build_triangle_tree(cone, options.max_leaf_triangles, model.cone_); !s.ok()) return s;
   model.cone_lengths_ = gwnrt::cone_boundary_lengths(model.cone_);
   model.cone_segments_ = gwnrt::cone_segments(model.cone_);
   model.smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
@@ -108,6 +118,10 @@ Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
 }
 
 Status GwnModel::set_sheet_level(float level) {
+  return guard_status("GwnModel::set_sheet_level", [&] { return set_sheet_level_unguarded(level); });
+}
+
+Status GwnModel::set_sheet_level_unguarded(float level) {
   if (!std::isfinite(level)) return {StatusCode::kInvalidArgument, "sheet level must be a finite number"};
   if (other_winding_.empty()) {  // the first classification: the coarse pass over all triangles
     const size_t n = triangles_.triangle_ids.size();
@@ -132,7 +146,7 @@ Status GwnModel::set_sheet_level(float level) {
   std::vector<uint32_t> sheets;
   for (uint32_t t = 0; t < other_winding_.size(); ++t)
     if (is_sheet(other_winding_[t], level, sheet_jump_[t])) sheets.push_back(t);
-  sheets_ = build_triangle_tree(mesh_, sheets, max_leaf_triangles_);
+  if (Status s = build_triangle_tree(mesh_, sheets, max_leaf_triangles_, sheets_); !s.ok()) return s;
   sheet_level_ = level;
   return Status::Ok();
 }

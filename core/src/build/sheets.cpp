@@ -1,8 +1,9 @@
-// Sheet classification: the other triangles' w at every triangle's centroid (model.h).
+// Sheet classification: the other triangles' w at every triangle's centroid (sdf/sheets.h).
 #include <tbb/parallel_for.h>
 
-#include "gwnrt/model.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/sdf/sheets.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 namespace {

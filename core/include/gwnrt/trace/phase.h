@@ -13,9 +13,9 @@
 // second safe step.
 #pragma once
 
-#include "gwnrt/distance.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 

@@ -6,8 +6,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#include "gwnrt/model.h"
-#include "gwnrt/multipole.h"
+#include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/field/multipole.h"
 
 namespace gwnrt {
 namespace {
@@ -204,7 +204,7 @@ TriangleTreeView TriangleTree::view() const {
           uint32_t(triangle_ids.size())};
 }
 
-TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size) {
+Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTree& out) {
   // Zero-area triangles contribute nothing to w, but evaluated in float near their line their
   // solid angle is noise of up to ±2π; so they are not part of the tree (nor of M for distances).
   std::vector<uint32_t> kept;
@@ -213,17 +213,18 @@ TriangleTree build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size) {
     const uvec3 tri = mesh.triangles[t];
     if (!is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) kept.push_back(t);
   }
-  return build_triangle_tree(mesh, kept, max_leaf_size);
+  return build_triangle_tree(mesh, kept, max_leaf_size, out);
 }
 
-TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size) {
+Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size,
+                           TriangleTree& out) {
   const size_t n = selection.size();
   std::vector<Aabb> bounds(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     for (int k = 0; k < 3; ++k) bounds[i].extend(mesh.positions[mesh.triangles[selection[i]][k]]);
   });
   TriangleTree tree;
-  tree.bvh = build_wide_bvh(bounds, max_leaf_size);
+  if (Status s = build_wide_bvh(bounds, max_leaf_size, tree.bvh); !s.ok()) return s;
   tree.triangle_ids.resize(n);
   for (size_t i = 0; i < n; ++i) tree.triangle_ids[i] = selection[tree.bvh.primitive_order[i]];
   tree.vertices.resize(3 * n);
@@ -232,7 +233,8 @@ TriangleTree build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> sel
     for (int k = 0; k < 3; ++k) tree.vertices[3 * i + k] = mesh.positions[tri[k]];
   });
   if (n > 0) MomentBuilder(tree).run();  // an empty tree has no root to hold moments
-  return tree;
+  out = std::move(tree);
+  return Status::Ok();
 }
 
 }  // namespace gwnrt

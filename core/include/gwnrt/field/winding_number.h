@@ -2,9 +2,9 @@
 // ∇w and H_w from the same traversal) and the brute-force reference. Host-and-device.
 #pragma once
 
-#include "gwnrt/bvh.h"
-#include "gwnrt/multipole.h"
-#include "gwnrt/solid_angle.h"
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/field/multipole.h"
+#include "gwnrt/field/solid_angle.h"
 
 namespace gwnrt {
 

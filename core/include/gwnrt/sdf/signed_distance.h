@@ -4,12 +4,12 @@
 // Host-and-device.
 #pragma once
 
-#include "gwnrt/distance.h"
-#include "gwnrt/harnack.h"
-#include "gwnrt/model_view.h"
-#include "gwnrt/phase.h"
-#include "gwnrt/surface_trace.h"
-#include "gwnrt/winding_number.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/trace/harnack.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/phase.h"
+#include "gwnrt/trace/surface_trace.h"
+#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 

@@ -10,8 +10,8 @@
 // so the counts are those of an honest ray and w stays consistent.
 #pragma once
 
-#include "gwnrt/bvh.h"
-#include "gwnrt/distance.h"
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/field/distance.h"
 
 namespace gwnrt {
 

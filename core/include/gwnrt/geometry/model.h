@@ -1,0 +1,94 @@
+// GwnModel: a mesh together with everything the queries need (the multipole triangle tree,
+// the boundary curve ∂M and its segment tree), built once on the CPU. Its views are what the
+// host-and-device query functions and the CUDA backend consume.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "gwnrt/geometry/boundary.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/geometry/segment_tree.h"
+#include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/status.h"
+
+namespace gwnrt {
+
+
+// Leaves hold at most this many primitives (the traversals' per-leaf loops assume few).
+inline constexpr uint32_t kMaxLeafSize = 64;
+
+struct BuildOptions {
+  uint32_t max_leaf_triangles = 4;
+  uint32_t max_leaf_segments = 4;
+  // Classify the sheets for w* = sheet_level at build (set_sheet_level changes the level later).
+  // It costs about what ten tree builds do (a w evaluation at every centroid; 2 s for 871k
+  // triangles on 2 cores): a model only traced (the Embree plugin) can skip it, and then
+  // refuses the sdf and sheet-distance queries.
+  bool classify_sheets = true;
+  float sheet_level = 0.5f;
+};
+
+struct BuildTimings {
+  double tree_seconds = 0;      // triangle BVH + moments
+  double boundary_seconds = 0;  // ∂M extraction + its tree
+  double sheet_seconds = 0;     // w of the other triangles at every centroid + the sheet tree
+};
+
+class GwnModel {
+ public:
+  // Validates the mesh (finite coordinates, indices in range, not empty) and builds.
+  static Status build(Mesh mesh, GwnModel& out, const BuildOptions& options = {});
+
+  const Mesh& mesh() const { return mesh_; }
+  const TriangleTree& triangle_tree() const { return triangles_; }
+  const BoundaryCurve& boundary() const { return boundary_; }
+  const SegmentTree& boundary_tree() const { return boundary_tree_; }
+  TriangleTreeView triangle_view() const { return triangles_.view(); }
+  SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
+  const TriangleTree& cone_tree() const { return cone_; }
+  std::span<const WideNodeLength> cone_boundary_lengths() const { return cone_lengths_; }
+  std::span<const ConeSegment> cone_segments() const { return cone_segments_; }
+  std::span<const SmoothRegion> smooth_regions() const { return smooth_regions_; }
+  const Aabb& bounds() const { return bounds_; }
+  float surface_margin() const { return surface_margin_; }
+  // Sheets: per input triangle the other triangles' w at its centroid (NaN for zero-area
+  // triangles), and the tree over the triangles that are sheets for sheet_level() (NaN when
+  // the sheets were not classified).
+  std::span<const float> other_winding() const { return other_winding_; }
+  std::span<const int8_t> sheet_jump() const { return sheet_jump_; }  // k per input triangle (is_sheet)
+  const TriangleTree& sheet_tree() const { return sheets_; }
+  float sheet_level() const { return sheet_level_; }
+  // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
+  // is too coarse to decide) and rebuilds the sheet tree. Not thread-safe with queries running
+  // on this model. Fails on a non-finite level.
+  Status set_sheet_level(float level);
+  ModelView view() const;
+  const BuildTimings& timings() const { return timings_; }
+
+ private:
+  static Status build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& options);
+  Status set_sheet_level_unguarded(float level);
+
+  Mesh mesh_;
+  TriangleTree triangles_;
+  BoundaryCurve boundary_;
+  SegmentTree boundary_tree_;
+  TriangleTree cone_;
+  std::vector<WideNodeLength> cone_lengths_;
+  std::vector<ConeSegment> cone_segments_;
+  std::vector<SmoothRegion> smooth_regions_;
+  Aabb bounds_;
+  float surface_margin_ = 0;
+  std::vector<float> other_winding_;
+  std::vector<int8_t> sheet_jump_;
+  std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
+  TriangleTree sheets_;
+  float sheet_level_ = __builtin_nanf("");
+  uint32_t max_leaf_triangles_ = 4;
+  BuildTimings timings_;
+};
+
+}  // namespace gwnrt

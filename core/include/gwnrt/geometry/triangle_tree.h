@@ -1,0 +1,32 @@
+// The multipole triangle tree: a wide BVH over triangles with the Taylor moments of every lane
+// (built in core/src/build/triangle_tree.cpp). The same tree serves M, the cone over ∂M and the
+// sheets.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/model_view.h"
+
+namespace gwnrt {
+
+struct TriangleTree {
+  WideBvh bvh;
+  std::vector<WideNodeExpansion> expansion;
+  std::vector<WideNodeOrder1> order1;
+  std::vector<WideNodeOrder2> order2;
+  std::vector<vec3> vertices;          // 3 per triangle, leaf order
+  std::vector<uint32_t> triangle_ids;  // leaf order -> input triangle
+  TriangleTreeView view() const;
+};
+
+Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTree& out);
+// The tree over the triangles `selection` of the mesh (input indices, none of zero area); its
+// triangle_ids are those input indices.
+Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size,
+                           TriangleTree& out);
+
+}  // namespace gwnrt

@@ -1,0 +1,36 @@
+// Sheet classification: which triangles are pieces of S for a level (computed in
+// core/src/build/sheets.cpp; docs/design.md, "Sheets").
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "gwnrt/hd.h"
+#include "gwnrt/geometry/triangle_tree.h"
+
+namespace gwnrt {
+
+// Sheet classification (DESIGN §1, signed distance). Across a triangle w jumps by its own ±1;
+// the other triangles' w, w_o, is continuous there, so the two sides carry w_o ± 1/2 and the
+// triangle is a piece of S = ∂{w > w*} when they straddle w*. (Equivalently, the side the normal
+// points to, w_o − 1/2, lies in (w* − 1, w*).) A stack of k coincident triangles (net count of
+// their orientations, a soup that repeats a face) makes w jump by k: the sides are w_o ± k/2,
+// with w_o the rest of the mesh, and k = 0 is no jump at all. w_o is taken at the centroid,
+// once per triangle.
+// This evaluates w_o and k at the centroids of the leaf-order triangles `leaves` of `tree`, into
+// out[input index] and jump[input index].
+void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
+                             std::span<float> out, std::span<int8_t> jump);
+// Sides within this of w* count as equal to it (the stored w_o is that accurate near the
+// threshold): then {w > w*} holds on the upper side only when it is really above, so a closed
+// mesh is all sheets for w* = 0 and none for w* = 1, not a coin toss.
+inline constexpr float kSheetSideTolerance = 1e-3f;
+// The sides lo = w_o − |k|/2 and hi = w_o + |k|/2 straddle w*: lo <= w* < hi. False for NaN
+// (zero-area triangles) and k = 0.
+GWNRT_HD inline bool is_sheet(float other_winding, float level, int jump = 1) {
+  const float half = 0.5f * float(jump < 0 ? -jump : jump);
+  const float at = level + kSheetSideTolerance;
+  return jump != 0 && other_winding - half <= at && other_winding + half > at;
+}
+
+}  // namespace gwnrt

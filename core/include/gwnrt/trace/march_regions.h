@@ -1,0 +1,75 @@
+// Where S can be: the padded box of M that holds every crossing (and so every sheet), the boxes
+// around the boundary loops that hold every smooth piece for a level, and their union, which
+// the Embree bounds callback reports. Used by the tracer, the signed distance and the plugin.
+#pragma once
+
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/hd.h"
+#include "gwnrt/trace/trace_types.h"
+
+namespace gwnrt {
+
+// Below this distance between 0 and the nearest level (w* near a whole number) the smooth
+// regions' bound is useless and the march covers M's box grown by ModelView::surface_margin.
+inline constexpr float kMinLevelDistance = 1e-3f;
+
+// Padding of M's box for the crossing walk, relative to its diagonal (plus an absolute floor for
+// flat meshes): far above float round-off of the crossing and clip computations.
+inline constexpr float kBoxPad = 1e-4f;
+
+// How far past a level round-off may carry a safe step, in φ: far above float ulps of φ, far
+// below the change of φ over the stopping distance.
+inline constexpr float kPhaseRoundOff = 1e-5f;
+inline constexpr float kBoxPadAbsolute = 1e-30f;
+
+// δ: the distance from 0 to the nearest level w* + k (the levels repeat with period 1 in w).
+GWNRT_HD inline float level_distance(float level) {
+  const float phase = level - floorf(level);
+  return min_of(phase, 1.0f - phase);
+}
+
+// Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
+// the box is rounded differently from the box clip and may fall just outside it.
+GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
+  Aabb padded = m.bounds;
+  const vec3 pad(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute);
+  padded.lo -= pad;
+  padded.hi += pad;
+  return padded;
+}
+
+// Where the march may be needed for level w*: the smooth regions grown for δ = the distance from
+// 0 to the nearest level (SmoothRegion), or, for levels at whole numbers, where that bound is
+// useless, M's box grown by surface_margin. No smooth piece of S lies outside these boxes.
+GWNRT_HD inline uint32_t march_box_count(const ModelView& m, float level) {
+  if (m.cone.triangle_count == 0) return 0;
+  if (!(level_distance(level) > kMinLevelDistance)) return 1u;
+  return m.smooth_region_count < kMaxSmoothRegions ? m.smooth_region_count : kMaxSmoothRegions;
+}
+
+GWNRT_HD inline Aabb march_box(const ModelView& m, float level, uint32_t r) {
+  const float delta = level_distance(level);
+  Aabb box;
+  float grow;
+  if (delta > kMinLevelDistance) {
+    box = m.smooth_regions[r].box;
+    grow = sqrtf(m.smooth_regions[r].spread / (4.0f * float(kPi) * delta));
+  } else {  // levels at whole numbers: only |w| <= A/(4π d²) of the whole mesh bounds them
+    box = m.bounds;
+    grow = m.surface_margin;
+  }
+  box.lo -= vec3(grow);
+  box.hi += vec3(grow);
+  return box;
+}
+
+// A box holding all of S for these options (what an Embree bounds callback reports): M's box for
+// the sheets, the march boxes for the smooth pieces. Empty (not valid()) when S is.
+GWNRT_HD inline Aabb surface_bounds(const ModelView& m, const TraceOptions& options) {
+  Aabb box;
+  if (options.mode == TraceMode::kWindingNumber) box.extend(crossing_box(m));
+  for (uint32_t r = 0; r < march_box_count(m, options.level); ++r) box.extend(march_box(m, options.level, r));
+  return box;
+}
+
+}  // namespace gwnrt

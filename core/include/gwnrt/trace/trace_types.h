@@ -1,0 +1,43 @@
+// What a ray trace is asked (TraceOptions) and what it answers (RayHit): the public types shared
+// by the tracer, the batch driver, the CUDA backend and the Embree plugin.
+#pragma once
+
+#include <cstdint>
+
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+enum class TraceMode : uint32_t {
+  kWindingNumber = 0,  // S = ∂{w > level}: sheets and smooth pieces
+  kSolidAngle = 1,     // {Ω ≡ 4π·level mod 4π}: smooth pieces only (the paper's nonplanar polygons)
+};
+
+struct TraceOptions {
+  TraceMode mode = TraceMode::kWindingNumber;
+  float level = 0.5f;         // w*; in solid-angle mode Ω*/(4π) (2π ↔ 0.5)
+  float epsilon = 1e-5f;      // stopping distance, relative to the box diagonal of M
+  uint32_t max_steps = 4096;  // Harnack evaluations per ray
+  uint32_t max_crossings = 1u << 16;
+  float beta = 2.0f;          // accuracy of the multipole evaluation of φ on the cone
+  bool overstep = true;
+  bool exact = false;         // φ by the double brute-force sum over the cone (reference, slow)
+};
+
+enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
+
+struct RayHit {
+  bool hit = false;
+  bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
+  bool invalid = false;  // rejected input: non-finite numbers or a zero direction
+  HitKind kind = HitKind::kNone;
+  float t = kInfinity;   // in units of the ray's own direction
+  vec3 position{0.0f};
+  vec3 normal{0.0f};     // unit, outward: from {w > w*} toward {w < w*}
+  uint32_t triangle = kEmptyLane;  // input index, sheet hits
+  uint32_t steps = 0;      // Harnack evaluations of φ
+  uint32_t crossings = 0;  // triangle crossings walked
+};
+
+}  // namespace gwnrt

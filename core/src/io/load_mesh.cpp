@@ -1,0 +1,51 @@
+// load_mesh (gwnrt/io/mesh_io.h): the reader chosen by the extension, then validate_mesh.
+#include <filesystem>
+
+#include "gwnrt/io/mesh_io.h"
+#include "io/readers.h"
+#include "io/text.h"
+
+namespace gwnrt {
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return ext;
+}
+
+Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* report) {
+  const std::string ext = lower_extension(path);
+  const bool is_obj = ext == ".obj";
+  if (!is_obj && ext != ".ply") {
+    return {StatusCode::kInvalidArgument,
+            cat(path, ": unsupported mesh file extension '", ext, "' (expected .obj or .ply)")};
+  }
+  std::string data;
+  if (Status s = io::read_whole_file(path, data); !s.ok()) return s;
+
+  Mesh m;
+  MeshLoadReport rep;
+  Status s = is_obj ? io::read_obj(path, data, m, rep) : io::read_ply(path, data, m, rep);
+  if (!s.ok()) return s;
+  if (s = validate_mesh(m, path); !s.ok()) return s;
+
+  rep.vertex_count = m.positions.size();
+  rep.triangle_count = m.triangles.size();
+  for (const uvec3& t : m.triangles) {
+    rep.degenerate_triangles += is_degenerate_triangle(m.positions[t.x], m.positions[t.y], m.positions[t.z]);
+  }
+  mesh = std::move(m);
+  if (report) *report = std::move(rep);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report) {
+  return guard_status(path.c_str(), [&] { return load_mesh_unguarded(path, mesh, report); });
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,27 @@
+// Strict OBJ and PLY readers. General-purpose loaders turn a malformed number into 0, accept
+// out-of-range indices or stop quietly at a truncated file; a silently wrong mesh gives
+// silently wrong winding numbers, so here every such defect is an error that names the file
+// and the line or element.
+//
+// Numbering in messages follows each format's own convention for references: OBJ vertices
+// are 1-based (as in its `f` statements) and come with the line number; PLY elements are
+// 0-based (as in its vertex_indices lists). Meshes checked by validate_mesh are 0-based.
+//
+// On failure, load_mesh leaves `mesh` and `report` untouched.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/status.h"
+
+namespace gwnrt::io {
+
+// Parse `data` (the contents of `path`) into `mesh`; messages name `path`. Validation of the
+// result (validate_mesh) is load_mesh's.
+Status read_obj(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
+Status read_ply(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
+
+}  // namespace gwnrt::io

@@ -1,0 +1,110 @@
+// What the mesh readers share: strict number parsing (a malformed number is an error, never a
+// 0), line tokens, reading a whole file, and polygon fanning.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
+#include <vector>
+
+#include "gwnrt/geometry/mesh.h"
+#include "gwnrt/status.h"
+#include "message.h"
+
+namespace gwnrt::io {
+
+using std::int64_t;
+using std::string_view;
+using std::uint32_t;
+using std::uint64_t;
+
+// Numbers
+
+// Numbers
+
+
+// std::from_chars rejects the leading '+' that some exporters write.
+inline string_view drop_plus(string_view s) {
+  if (s.size() >= 2 && s[0] == '+' && s[1] != '+' && s[1] != '-') s.remove_prefix(1);
+  return s;
+}
+
+template <class F>
+bool parse_real(string_view s, F& out) {
+  s = drop_plus(s);
+  const char* const b = s.data();
+  const char* const e = b + s.size();
+  if (b == e) return false;
+  F v{};
+  const auto [ptr, ec] = std::from_chars(b, e, v);
+  if (ptr != e) return false;
+  if (ec == std::errc()) {
+    out = v;
+    return true;
+  }
+  if (ec != std::errc::result_out_of_range) return false;
+  // A well-formed number beyond the type's range keeps IEEE semantics: an overflow becomes
+  // an infinity (then reported as a non-finite coordinate), an underflow becomes zero.
+  if constexpr (std::is_same_v<F, float>) {
+    double d;
+    if (!parse_real(s, d)) return false;
+    out = static_cast<float>(d);  // IEC 559 narrowing: rounds, overflows to infinity
+    return true;
+  } else {
+    // from_chars leaves the value unset; only the exponent's sign tells the two cases apart
+    // (without an exponent, out of range needs more than 300 digits: an overflow).
+    const bool negative = s[0] == '-';
+    const size_t epos = s.find_first_of("eE");
+    const bool underflow = epos != string_view::npos && epos + 1 < s.size() && s[epos + 1] == '-';
+    const F mag = underflow ? F(0) : std::numeric_limits<F>::infinity();
+    out = negative ? -mag : mag;
+    return true;
+  }
+}
+
+enum class IntParse { kOk, kMalformed, kOutOfRange };
+
+inline IntParse parse_int(string_view s, int64_t& out) {
+  s = drop_plus(s);
+  const char* const b = s.data();
+  const char* const e = b + s.size();
+  if (b == e) return IntParse::kMalformed;
+  const auto [ptr, ec] = std::from_chars(b, e, out);
+  if (ptr != e) return IntParse::kMalformed;
+  if (ec == std::errc::result_out_of_range) return IntParse::kOutOfRange;
+  return ec == std::errc() ? IntParse::kOk : IntParse::kMalformed;
+}
+
+// Text scanning
+
+// Text scanning
+
+inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+// Whitespace-separated tokens of one line.
+struct LineTokens {
+  const char* p;
+  const char* end;
+  bool next(string_view& tok) {
+    while (p < end && is_blank(*p)) ++p;
+    if (p == end) return false;
+    const char* const b = p;
+    while (p < end && !is_blank(*p)) ++p;
+    tok = string_view(b, static_cast<size_t>(p - b));
+    return true;
+  }
+};
+
+// The whole file at `path` into `data`; fails naming the file (missing, a directory, unreadable).
+Status read_whole_file(const std::string& path, std::string& data);
+
+inline constexpr uint64_t kMaxVertices = uint64_t(std::numeric_limits<uint32_t>::max()) + 1;
+
+inline void fan(const std::vector<uint32_t>& corners, std::vector<uvec3>& tris) {
+  for (size_t i = 1; i + 1 < corners.size(); ++i) tris.emplace_back(corners[0], corners[i], corners[i + 1]);
+}
+
+}  // namespace gwnrt::io
