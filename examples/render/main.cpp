@@ -23,7 +23,7 @@
 #include <tbb/global_control.h>
 
 #include "camera.h"
-#include "path_tracer.h"
+#include "integrators/path.h"
 #include "render_scene.h"
 #include "scene.h"
 #include "gwnrt/batch.h"
@@ -31,7 +31,7 @@
 #include "gwnrt/geometry/model.h"
 #include "image_output.h"
 #include "load_model.h"
-#include "primary_render.h"
+#include "integrators/first_hit.h"
 #include "progress_bar.h"
 #include "shading.h"
 #include "trace_level.h"

@@ -10,7 +10,7 @@
 #include <tbb/global_control.h>
 
 #include "../test_util.h"
-#include "path_tracer.h"
+#include "integrators/path.h"
 #include "render_scene.h"
 #include "scene.h"
 

@@ -1,4 +1,4 @@
-#include "primary_render.h"
+#include "integrators/first_hit.h"
 
 #include <algorithm>
 #include <chrono>

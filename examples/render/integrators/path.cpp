@@ -1,4 +1,4 @@
-#include "path_tracer.h"
+#include "integrators/path.h"
 
 #include <algorithm>
 #include <chrono>
