@@ -9,12 +9,22 @@
 namespace gwnrt {
 namespace {
 
-// out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
-template <class In, class Out, class Fn>
-void parallel_map(std::span<const In> in, std::span<Out> out, size_t grain, std::atomic<size_t>* progress, Fn fn) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), grain), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fn(in[i]);
-    if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
+// What the drivers share: `name` fails when in and out differ in size (naming what they hold),
+// else out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
+// validate runs between the two checks, so a batch of the wrong size is reported as that first.
+template <class In, class Out, class Validate, class Fn>
+Status parallel_map(const char* name, const char* items, const char* slots, std::span<const In> in,
+                    std::span<Out> out, size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn) {
+  if (in.size() != out.size())
+    return {StatusCode::kInvalidArgument, std::string(name) + ": " + std::to_string(in.size()) + " " + items +
+                                              " but " + std::to_string(out.size()) + " " + slots};
+  if (Status s = validate(); !s.ok()) return s;
+  return guard_status(name, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), grain), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fn(in[i]);
+      if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
+    });
+    return Status::Ok();
   });
 }
 
@@ -46,15 +56,11 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
 
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress) {
-  if (points.size() != results.size())
-    return {StatusCode::kInvalidArgument, "evaluate_points: " + std::to_string(points.size()) + " points but " +
-                                              std::to_string(results.size()) + " result slots"};
   const ModelView view = model_view(model);
-  if (Status s = validate_request(request, &view); !s.ok()) return s;
-  return guard_status("evaluate_points", [&] {
-    parallel_map(points, results, 256, progress, [&](const vec3& x) { return evaluate_point(view, x, request); });
-    return Status::Ok();
-  });
+  return parallel_map(
+      "evaluate_points", "points", "result slots", points, results, 256, progress,
+      [&] { return validate_request(request, &view); },
+      [&](const vec3& x) { return evaluate_point(view, x, request); });
 }
 
 Status validate_trace_options(const TraceOptions& options) {
@@ -72,16 +78,11 @@ Status validate_trace_options(const TraceOptions& options) {
 
 Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options,
                   std::span<RayHit> hits, std::atomic<size_t>* progress) {
-  if (rays.size() != hits.size())
-    return {StatusCode::kInvalidArgument, "trace_rays: " + std::to_string(rays.size()) + " rays but " +
-                                              std::to_string(hits.size()) + " hit slots"};
-  if (Status s = validate_trace_options(options); !s.ok()) return s;
   const ModelView view = model_view(model);
   // Rays cost far more than points (and vary more), so chunks are smaller.
-  return guard_status("trace_rays", [&] {
-    parallel_map(rays, hits, 64, progress, [&](const Ray& ray) { return trace_surface(view, ray, options); });
-    return Status::Ok();
-  });
+  return parallel_map(
+      "trace_rays", "rays", "hit slots", rays, hits, 64, progress, [&] { return validate_trace_options(options); },
+      [&](const Ray& ray) { return trace_surface(view, ray, options); });
 }
 
 }  // namespace gwnrt

@@ -1,3 +1,5 @@
+// Uploading a GwnModel's arrays to the device (the owner DeviceModel, the views it hands out),
+// and whether a device can be used at all.
 #include "device_buffer.h"
 #include "gwnrt/cuda.h"
 
@@ -63,6 +65,7 @@ DeviceModel& DeviceModel::operator=(DeviceModel&&) noexcept = default;
 ModelView DeviceModel::view() const { return buffers_ ? buffers_->view : ModelView{}; }
 
 Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
+  return guard_status("DeviceModel::upload", [&]() -> Status {
   std::string why;
   if (!device_available(&why)) return {StatusCode::kUnavailable, why};
   auto b = std::make_unique<Buffers>();
@@ -89,6 +92,7 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   b->view = v;
   out.buffers_ = std::move(b);
   return Status::Ok();
+  });
 }
 
 }  // namespace gwnrt::cuda

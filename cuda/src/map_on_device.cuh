@@ -5,6 +5,7 @@
 #include <span>
 
 #include "device_buffer.h"
+#include "gwnrt/geometry/model_view.h"
 
 namespace gwnrt::cuda {
 
@@ -28,6 +29,18 @@ Status map_on_device(std::span<const In> in, std::span<Out> out, int block, Fn f
   if (Status s = cuda_status(cudaGetLastError(), "kernel launch"); !s.ok()) return s;
   if (Status s = cuda_status(cudaDeviceSynchronize(), "kernel execution"); !s.ok()) return s;
   return d_out.download(out.data(), out.size());
+}
+
+// What the batch entry points share (as the CPU drivers do, batch.cpp): `name` fails when in and
+// out differ in size, then on validate(), then on a model never uploaded; else map_on_device.
+template <class In, class Out, class Validate, class Fn>
+Status map_batch_on_device(const char* name, const ModelView& model, std::span<const In> in, std::span<Out> out,
+                           int block, Validate validate, Fn fn) {
+  if (in.size() != out.size()) return {StatusCode::kInvalidArgument, std::string(name) + ": inputs and outputs differ in size"};
+  if (Status s = validate(); !s.ok()) return s;
+  if (in.empty()) return Status::Ok();
+  if (!model.triangles.bvh.nodes) return {StatusCode::kInvalidArgument, std::string(name) + ": model not uploaded"};
+  return map_on_device(in, out, block, fn);
 }
 
 }  // namespace gwnrt::cuda

@@ -16,13 +16,10 @@ struct EvaluatePoint {
 
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results) {
-  if (points.size() != results.size())
-    return {StatusCode::kInvalidArgument, "evaluate_points: points and results differ in size"};
   const ModelView view = model.view();
-  if (Status s = validate_request(request, &view); !s.ok()) return s;
-  if (points.empty()) return Status::Ok();
-  if (!model.view().triangles.bvh.nodes) return {StatusCode::kInvalidArgument, "evaluate_points: model not uploaded"};
-  return map_on_device(points, results, 128, EvaluatePoint{model.view(), request});
+  return map_batch_on_device(
+      "evaluate_points", view, points, results, 128, [&] { return validate_request(request, &view); },
+      EvaluatePoint{view, request});
 }
 
 }  // namespace gwnrt::cuda

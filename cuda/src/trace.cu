@@ -17,12 +17,10 @@ struct TraceRay {
 
 Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
                   std::span<RayHit> hits) {
-  if (rays.size() != hits.size()) return {StatusCode::kInvalidArgument, "trace_rays: rays and hits differ in size"};
-  if (Status s = validate_trace_options(options); !s.ok()) return s;
-  if (rays.empty()) return Status::Ok();
-  if (!model.view().triangles.bvh.nodes) return {StatusCode::kInvalidArgument, "trace_rays: model not uploaded"};
   // Smaller blocks than for points: rays diverge in cost and hold a larger stack.
-  return map_on_device(rays, hits, 64, TraceRay{model.view(), options});
+  return map_batch_on_device(
+      "trace_rays", model.view(), rays, hits, 64, [&] { return validate_trace_options(options); },
+      TraceRay{model.view(), options});
 }
 
 }  // namespace gwnrt::cuda

@@ -1,4 +1,4 @@
-// The error model (docs/design.md, "Errors"): every public function that can fail returns a
+// The error model (docs/design.md §8): every public function that can fail returns a
 // Status; ok() says it worked, message() says what went wrong in words a user can act on (the
 // file, line, element or option). [[nodiscard]]: a Status cannot be dropped by accident. Nothing
 // throws across a public function: each catches at its boundary (guard_status), allocation

@@ -3,6 +3,7 @@
 
 #include "gwnrt/geometry/triangle_tree.h"
 #include "gwnrt/sdf/sheets.h"
+#include "gwnrt/field/solid_angle.h"
 #include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
@@ -25,9 +26,8 @@ struct SumWithoutStack {
     // denominator < 0: the solid angle's ±2π branch).
     const vec3 a = p0 - sum.x, b = p1 - sum.x, c = p2 - sum.x;
     const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-    const float volume = glm::dot(a, glm::cross(b, c));
-    const float denominator = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
-    if (fabsf(volume) <= 1e-5f * la * lb * lc && denominator < 0.0f) {
+    const SolidAngleTangent<float> tangent = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+    if (fabsf(tangent.numerator) <= 1e-5f * la * lb * lc && tangent.denominator < 0.0f) {
       jump += glm::dot(glm::cross(p1 - p0, p2 - p0), normal) > 0.0f ? 1 : -1;
       return;
     }

@@ -1,5 +1,5 @@
 // The multipole tree: the wide BVH over the triangles plus, per lane, the expansion centre,
-// radius and moments (DESIGN §2), computed bottom-up in double and stored compressed in float.
+// radius and moments (docs/design.md §2), computed bottom-up in double and stored compressed in float.
 #include <algorithm>
 #include <cmath>
 

@@ -32,20 +32,20 @@ struct ModelView {
   SegmentTreeView boundary;    // ∂M
   // The cone C over ∂M: triangles (z, a, b) for each boundary segment a→b, z the mean of the
   // boundary vertices. M − C is closed, so w − w_C is an integer off M ∪ C and w mod 1 =
-  // w_C mod 1 (DESIGN §3): the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
+  // w_C mod 1 (docs/design.md §3): the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
   TriangleTreeView cone;
   // Per node of the cone's tree: the length of ∂M below each lane (its triangles' edges 1 -> 2
   // are exactly the segments of ∂M), for the tracer's bound on |∇w| (phase.h).
   const WideNodeLength* cone_boundary_lengths = nullptr;
   const ConeSegment* cone_segments = nullptr;  // per cone triangle, in leaf order
-  // The sheet triangles of M for the level sheet_level (model.h, is_sheet): the distance to
+  // The sheet triangles of M for the level sheet_level (sdf/sheets.h, is_sheet): the distance to
   // the sheet pieces of S is the distance to them.
   TriangleTreeView sheets;
   float sheet_level = __builtin_nanf("");  // NaN: not classified (the tree is empty)
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M
-  float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (DESIGN §5)
+  float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (docs/design.md §5)
 };
 
 }  // namespace gwnrt

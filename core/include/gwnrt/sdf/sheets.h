@@ -1,5 +1,5 @@
 // Sheet classification: which triangles are pieces of S for a level (computed in
-// core/src/build/sheets.cpp; docs/design.md, "Sheets").
+// core/src/build/sheets.cpp; docs/design.md §4).
 #pragma once
 
 #include <cstdint>
@@ -10,7 +10,7 @@
 
 namespace gwnrt {
 
-// Sheet classification (DESIGN §1, signed distance). Across a triangle w jumps by its own ±1;
+// Sheet classification (docs/design.md §4). Across a triangle w jumps by its own ±1;
 // the other triangles' w, w_o, is continuous there, so the two sides carry w_o ± 1/2 and the
 // triangle is a piece of S = ∂{w > w*} when they straddle w*. (Equivalently, the side the normal
 // points to, w_o − 1/2, lies in (w* − 1, w*).) A stack of k coincident triangles (net count of

@@ -1,4 +1,4 @@
-// Signed distance to S = ∂{w > w*} (DESIGN §1), negative inside {w > w*}: the distance to the
+// Signed distance to S = ∂{w > w*} (docs/design.md §4), negative inside {w > w*}: the distance to the
 // sheet triangles, the pseudo-SDF of the smooth pieces (first order and curvature-corrected),
 // Newton projection onto the smooth pieces, and the Harnack lower bound that clamps them all.
 // Host-and-device.

@@ -1,7 +1,8 @@
-// Where a ray steps: how far φ = w mod 1 can be followed before it may reach a level. Three
+// How long a step may be: how far φ = w mod 1 can be followed before it may reach a level. Three
 // bounds, each safe on its own: Harnack's (Gillespie, Yang, Botsch, Crane 2024, Eq. 7 and
 // Algorithm 2), a Lipschitz bound from the Biot–Savart field of ∂M, and a second-order one near
-// a level. Host-and-device.
+// a level (docs/design.md §3). The march that takes these steps is SurfaceTracer
+// (surface_trace.h); what a step needs at a point is phase.h. Host-and-device.
 #pragma once
 
 #include "gwnrt/hd.h"

@@ -1,4 +1,4 @@
-// Ray first-hit on S = ∂{w > w*} (DESIGN §1, §3), and on level sets of Ω mod 4π (solid-angle
+// Ray first-hit on S = ∂{w > w*} (docs/design.md §1, §3), and on level sets of Ω mod 4π (solid-angle
 // mode). Host-and-device: the TBB driver, the renderer and the CUDA kernel all call trace_surface.
 //
 // Along a ray, w = (its band, an integer) + φ, φ = w mod 1. φ is continuous across M and
