@@ -121,16 +121,23 @@ int material_index(const json& j, const std::string& where, const SceneDesc& sce
 
 void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) {
   if (!j.is_object()) fail("/", "expected a JSON object");
-  if (j.contains("camera")) {
-    const json& c = j["camera"];
-    if (c.contains("eye")) s.camera.eye = vector3(c["eye"], "/camera/eye");
-    if (c.contains("target")) s.camera.target = vector3(c["target"], "/camera/target");
-    if (c.contains("up")) s.camera.up = vector3(c["up"], "/camera/up");
-    if (c.contains("fov")) s.camera.fov_degrees = number(c["fov"], "/camera/fov");
-    if (c.contains("width")) s.camera.width = integer(c["width"], "/camera/width", 1, 1 << 15);
-    if (c.contains("height")) s.camera.height = integer(c["height"], "/camera/height", 1, 1 << 15);
-    if (!(s.camera.fov_degrees > 0.0f && s.camera.fov_degrees < 180.0f)) fail("/camera/fov", "must lie in (0, 180)");
-    if (!(glm::length(s.camera.target - s.camera.eye) > 0.0f)) fail("/camera", "eye and target coincide");
+  {
+    // What a missing "camera" block or key means.
+    vec3 eye(0.0f, 0.0f, 5.0f), target(0.0f), up(0.0f, 1.0f, 0.0f);
+    float fov_degrees = 40.0f;  // vertical
+    int width = 640, height = 480;
+    if (j.contains("camera")) {
+      const json& c = j["camera"];
+      if (c.contains("eye")) eye = vector3(c["eye"], "/camera/eye");
+      if (c.contains("target")) target = vector3(c["target"], "/camera/target");
+      if (c.contains("up")) up = vector3(c["up"], "/camera/up");
+      if (c.contains("fov")) fov_degrees = number(c["fov"], "/camera/fov");
+      if (c.contains("width")) width = integer(c["width"], "/camera/width", 1, 1 << 15);
+      if (c.contains("height")) height = integer(c["height"], "/camera/height", 1, 1 << 15);
+      if (!(fov_degrees > 0.0f && fov_degrees < 180.0f)) fail("/camera/fov", "must lie in (0, 180)");
+      if (!(glm::length(target - eye) > 0.0f)) fail("/camera", "eye and target coincide");
+    }
+    s.camera = examples::look_at(eye, target, up, fov_degrees, width, height);
   }
   if (j.contains("render")) {
     const json& r = j["render"];
@@ -286,10 +293,10 @@ Status default_scene(const std::string& mesh_path, SceneDesc& out) {
   // Frame the object's bounding sphere from the front-right, slightly above.
   const float radius = 0.5f * glm::length(extent);
   const vec3 look = vec3(0.0f, 0.5f * extent.y, 0.0f);
-  s.camera.fov_degrees = 35.0f;
-  const float distance = 1.3f * radius / std::tan(0.5f * glm::radians(s.camera.fov_degrees));
-  s.camera.target = look;
-  s.camera.eye = look + distance * glm::normalize(vec3(0.55f, 0.35f, 0.9f));
+  const float fov_degrees = 35.0f;
+  const float distance = 1.3f * radius / std::tan(0.5f * glm::radians(fov_degrees));
+  s.camera = examples::look_at(look + distance * glm::normalize(vec3(0.55f, 0.35f, 0.9f)), look, vec3(0.0f, 1.0f, 0.0f),
+                               fov_degrees, 640, 480);
   out = std::move(s);
   return Status::Ok();
 }

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "bsdf.h"
+#include "camera.h"
 #include "environment.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/status.h"
@@ -35,16 +36,12 @@
 
 namespace gwnrt::render {
 
-struct CameraDesc {
-  vec3 eye{0.0f, 0.0f, 5.0f}, target{0.0f}, up{0.0f, 1.0f, 0.0f};
-  float fov_degrees = 40.0f;  // vertical
-  int width = 640, height = 480;
-};
-
+// How the path tracer renders: a scene file's "render" block, overridden by the command line.
 struct RenderSettings {
   int spp = 16;
   int max_depth = 8;  // path vertices after the camera
   uint64_t seed = 1;
+  bool aovs = false;  // also albedo, normal and depth of the first hit (--aovs; not in scene files)
 };
 
 struct MeshDesc {
@@ -68,7 +65,7 @@ struct EnvironmentDesc {
 };
 
 struct SceneDesc {
-  CameraDesc camera;
+  examples::PinholeCamera camera;  // a scene file's "camera" block through look_at
   RenderSettings render;
   std::vector<Material> materials;
   std::vector<std::string> material_names;

@@ -31,11 +31,7 @@ SceneDesc furnace(float albedo, float environment) {
   sphere.instances.push_back(glm::mat4(1.0f));
   s.gwn_objects.push_back(std::move(sphere));
   s.environment.radiance = Spectrum(environment);
-  s.camera.eye = vec3(0.0f, 0.0f, 4.0f);
-  s.camera.target = vec3(0.0f);
-  s.camera.fov_degrees = 40.0f;
-  s.camera.width = 40;
-  s.camera.height = 40;
+  s.camera = examples::look_at(vec3(0.0f, 0.0f, 4.0f), vec3(0.0f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 40, 40);
   return s;
 }
 
@@ -75,7 +71,7 @@ FurnaceResult render_furnace(float albedo, float environment, int spp) {
   const SceneDesc desc = furnace(albedo, environment);
   RenderScene scene;
   EXPECT_TRUE(scene.build(desc).ok());
-  PathSettings settings;
+  RenderSettings settings;
   settings.spp = spp;
   settings.max_depth = 8;
   settings.aovs = true;
@@ -137,7 +133,7 @@ TEST(PathTracer, FurnaceGlassGwnSphereIsInvisible) {
   s.materials[0] = Material{MaterialKind::kDielectric, Spectrum(0.25f), 0.0f, 1.5f, Spectrum(0.0f)};
   RenderScene scene;
   ASSERT_TRUE(scene.build(s).ok());
-  PathSettings settings;
+  RenderSettings settings;
   settings.spp = 64;
   settings.max_depth = 32;
   settings.aovs = true;
@@ -190,7 +186,7 @@ TEST(PathTracer, ImageEnvironmentLightsADiffuseSphereAsTheClosedFormSays) {
   s.environment.file = path;
   RenderScene scene;
   ASSERT_TRUE(scene.build(s).ok());
-  PathSettings settings;
+  RenderSettings settings;
   settings.spp = 64;
   settings.aovs = true;
   const PathRender r = render_paths(scene, settings);
@@ -233,9 +229,21 @@ TEST(PathTracer, ImageEnvironmentLightsADiffuseSphereAsTheClosedFormSays) {
   }
 }
 
-// Mean radiance over the pixels that see `material` only (through the albedo AOV) of a render.
-double mean_radiance_on(const PathRender& r, float albedo, size_t& pixels) {
-  const PixelMean m = pixel_mean(r, [&](const float* p) { return std::abs(p[3] - albedo) <= 1e-6f; });
+// `s` rendered with `spp` samples per pixel: the mean radiance over the pixels that see only the
+// material of albedo `albedo` (through the albedo AOV), and how many they are (0 if `s` does not
+// build).
+double mean_radiance_on(const SceneDesc& s, int spp, float albedo, size_t& pixels) {
+  pixels = 0;
+  RenderScene scene;
+  if (Status st = scene.build(s); !st.ok()) {
+    ADD_FAILURE() << st.message();
+    return 0.0;
+  }
+  RenderSettings settings;
+  settings.spp = spp;
+  settings.aovs = true;
+  const PixelMean m =
+      pixel_mean(render_paths(scene, settings), [&](const float* p) { return std::abs(p[3] - albedo) <= 1e-6f; });
   pixels = m.pixels;
   return m.mean;
 }
@@ -265,17 +273,9 @@ TEST(PathTracer, FloorUnderAnEmissiveCeilingReflectsAlbedoTimesRadiance) {
   ceiling.mesh = square(1000.0f, 1.0f, false);
   ceiling.material = 1;
   s.meshes = {floor, ceiling};
-  s.camera.eye = vec3(0.0f, 0.5f, 0.0f);
-  s.camera.target = vec3(0.3f, 0.0f, 0.2f);
-  s.camera.fov_degrees = 30.0f;
-  s.camera.width = s.camera.height = 24;
-  RenderScene scene;
-  ASSERT_TRUE(scene.build(s).ok());
-  PathSettings settings;
-  settings.spp = 64;
-  settings.aovs = true;
+  s.camera = examples::look_at(vec3(0.0f, 0.5f, 0.0f), vec3(0.3f, 0.0f, 0.2f), vec3(0.0f, 1.0f, 0.0f), 30.0f, 24, 24);
   size_t pixels = 0;
-  const double mean = mean_radiance_on(render_paths(scene, settings), albedo, pixels);
+  const double mean = mean_radiance_on(s, 64, albedo, pixels);
   std::printf("[ emissive ceiling ] %zu floor pixels: mean %.5f, expected %.5f\n", pixels, mean, double(albedo * emission));
   ASSERT_GT(pixels, 500u);
   EXPECT_NEAR(mean, albedo * emission, 0.01 * albedo * emission);
@@ -293,16 +293,9 @@ TEST(PathTracer, FloorUnderTheSunFollowsLambert) {
   s.sun.direction = glm::normalize(vec3(0.3f, 0.8f, 0.2f));
   s.sun.radiance = Spectrum(1.0e4f);
   s.sun.angular_radius = 0.01f;
-  s.camera.eye = vec3(0.0f, 2.0f, 0.0f);
-  s.camera.target = vec3(0.5f, 0.0f, 0.1f);
-  s.camera.width = s.camera.height = 16;
-  RenderScene scene;
-  ASSERT_TRUE(scene.build(s).ok());
-  PathSettings settings;
-  settings.spp = 16;
-  settings.aovs = true;
+  s.camera = examples::look_at(vec3(0.0f, 2.0f, 0.0f), vec3(0.5f, 0.0f, 0.1f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 16, 16);
   size_t pixels = 0;
-  const double mean = mean_radiance_on(render_paths(scene, settings), albedo, pixels);
+  const double mean = mean_radiance_on(s, 16, albedo, pixels);
   const double cone = 2.0 * kPi * (1.0 - std::cos(0.01));
   // The disc's own cosine spread is 1 ± 5e-5 across 0.01 rad: the centre cosine suffices.
   const double expected = albedo / kPi * 1.0e4 * cone * s.sun.direction.y;
@@ -318,7 +311,7 @@ PathRender render_default_scene(int threads, uint64_t seed) {
   desc.camera.height = 32;
   RenderScene scene;
   EXPECT_TRUE(scene.build(desc).ok());
-  PathSettings settings;
+  RenderSettings settings;
   settings.spp = 2;
   settings.seed = seed;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));

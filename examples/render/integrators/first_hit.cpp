@@ -3,12 +3,20 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
+#include "gwnrt/batch.h"
+#include "gwnrt/geometry/model.h"
+#include "image_output.h"
+#include "load_model.h"
+#include "program.h"
+#include "progress_bar.h"
+#include "render_program.h"
 #include "tiles.h"
 
 namespace gwnrt::render {
 
-void RenderStats::add(const RayHit& hit, const vec3& dir, const TraceOptions& options) {
+void FirstHitStats::add(const RayHit& hit, const vec3& dir, const TraceOptions& options) {
   ++rays;
   steps += hit.steps;
   crossings += hit.crossings;
@@ -25,7 +33,7 @@ void RenderStats::add(const RayHit& hit, const vec3& dir, const TraceOptions& op
   if (glm::dot(hit.normal, dir) > 0.0f) ++facing_away;
 }
 
-RenderStats& RenderStats::operator+=(const RenderStats& o) {
+FirstHitStats& FirstHitStats::operator+=(const FirstHitStats& o) {
   rays += o.rays;
   steps += o.steps;
   crossings += o.crossings;
@@ -39,21 +47,21 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
   return *this;
 }
 
-PrimaryRender render_primary(const ModelView& model, const examples::PinholeCamera& camera,
-                             const PrimaryRenderSettings& settings, std::atomic<std::size_t>* progress) {
+FirstHitRender render_first_hit(const ModelView& model, const examples::PinholeCamera& camera,
+                                const FirstHitSettings& settings, std::atomic<std::size_t>* progress) {
   const int width = camera.width, height = camera.height;
-  PrimaryRender out;
+  FirstHitRender out;
   out.colour = Image(width, height, {"R", "G", "B"});
   out.traces.resize(std::size_t(width) * std::size_t(height));
 
   const TileGrid grid(width, height);
   // One slot per tile, summed in tile order afterwards: the totals come out the same on every
   // run whatever the thread count, and no two tasks ever write the same counter.
-  std::vector<RenderStats> tile_stats(std::size_t(grid.count()));
+  std::vector<FirstHitStats> tile_stats(std::size_t(grid.count()));
 
   const auto start = std::chrono::steady_clock::now();
   parallel_for_tiles(grid, [&](const Tile& tile) {
-    RenderStats& stats = tile_stats[std::size_t(tile.index)];
+    FirstHitStats& stats = tile_stats[std::size_t(tile.index)];
     for (int y = tile.y0; y < tile.y1; ++y) {
       const float v = (float(y) + 0.5f) / float(height);
       for (int x = tile.x0; x < tile.x1; ++x) {
@@ -72,11 +80,11 @@ PrimaryRender render_primary(const ModelView& model, const examples::PinholeCame
   });
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  for (const RenderStats& s : tile_stats) out.stats += s;
+  for (const FirstHitStats& s : tile_stats) out.stats += s;
   return out;
 }
 
-Image steps_image(const PrimaryRender& render, uint32_t scale_max) {
+Image steps_image(const FirstHitRender& render, uint32_t scale_max) {
   const int width = render.colour.width(), height = render.colour.height();
   Image image(width, height, {"R", "G", "B", "steps", "crossings", "kind", "capped"});
   if (scale_max == 0) scale_max = render.stats.max_steps;
@@ -101,6 +109,75 @@ Image steps_image(const PrimaryRender& render, uint32_t scale_max) {
     }
   }
   return image;
+}
+
+int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
+  const examples::ThreadLimit thread_limit(job.threads);
+  const TraceOptions& trace = job.settings.trace;
+  const bool solid_angle = trace.mode == TraceMode::kSolidAngle;
+
+  GwnModel model;
+  examples::ModelLoad loaded;
+  if (Status s = examples::load_model(job.mesh, model, loaded); !s.ok()) return examples::fail(kProgram, s.message());
+  const size_t boundary_segments = model.boundary().segment_count();
+  std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,
+              job.mesh.c_str(), loaded.report.triangle_count, boundary_segments, boundary_segments ? "" : " (closed)",
+              loaded.load_seconds, loaded.build_seconds);
+  std::fflush(stdout);
+  if (solid_angle && boundary_segments == 0) {
+    // Off a closed mesh Ω is a whole multiple of 4π: there is no level set to see.
+    warn("the mesh is closed: in solid-angle mode there is nothing to render");
+  }
+
+  const examples::PinholeCamera camera =
+      examples::frame_box(model.bounds(), job.width, job.height, job.azimuth, job.elevation, job.fov_degrees);
+  std::atomic<size_t> progress{0};
+  FirstHitRender render;
+  {
+    examples::ProgressBar bar(progress, size_t(job.width) * size_t(job.height), "px");
+    render = render_first_hit(model_view(model), camera, job.settings, &progress);
+  }
+
+  const FirstHitStats& stats = render.stats;
+  const double rays_per_second = render.seconds > 0 ? double(stats.rays) / render.seconds : 0.0;
+  std::printf("%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
+              "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
+              kProgram, job.width, job.height, render.seconds, count_of(thread_limit.workers(), "thread").c_str(),
+              examples::human_count(rays_per_second).c_str(), stats.mean_steps(), stats.max_steps,
+              stats.mean_crossings(), (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
+              (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
+              (unsigned long long)(stats.step_capped + stats.crossing_capped));
+  std::fflush(stdout);
+  if (stats.step_capped) {
+    warn(count_of(stats.step_capped, "ray") + " hit the step cap (--max-steps " + std::to_string(trace.max_steps) +
+         "), shown as background");
+  }
+  if (stats.crossing_capped) {
+    warn(count_of(stats.crossing_capped, "ray") + " hit the crossing cap (" + std::to_string(trace.max_crossings) +
+         " crossings), shown as background");
+  }
+  if (stats.invalid) warn(count_of(stats.invalid, "ray") + " rejected by the tracer as invalid");
+  // With the eye outside {w > level} (far from the mesh w is near 0), every first hit enters the
+  // region, so its outward normal faces the eye. Solid-angle levels are crossed both ways.
+  if (!solid_angle && trace.level > 0.0f && stats.facing_away) {
+    warn(count_of(stats.facing_away, "hit") + " with an outward normal facing away from the camera");
+  }
+
+  if (Status s = write_image(job.output, render.colour, description); !s.ok()) return examples::fail(kProgram, s.message());
+  std::printf("%s: wrote %s\n", kProgram, job.output.c_str());
+  if (!job.stats_image.empty()) {
+    const Image steps = steps_image(render);
+    if (Status s = write_image(job.stats_image, steps, description); !s.ok()) return examples::fail(kProgram, s.message());
+    if (stats.max_steps == 0) {
+      std::printf("%s: wrote %s (no ray took a Harnack step: grey is a hit, black a miss)\n", kProgram,
+                  job.stats_image.c_str());
+    } else {
+      std::printf("%s: wrote %s (Harnack steps per pixel, log scale from dark blue = 1 to red = %u; grey: a hit "
+                  "without steps; black: a miss without steps; magenta: capped)\n",
+                  kProgram, job.stats_image.c_str(), std::max(stats.max_steps, 2u));
+    }
+  }
+  return 0;
 }
 
 }  // namespace gwnrt::render

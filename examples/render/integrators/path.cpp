@@ -3,8 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <limits>
 
+#include "image_output.h"
+#include "load_model.h"
+#include "program.h"
+#include "progress_bar.h"
+#include "render_program.h"
 #include "tiles.h"
 
 namespace gwnrt::render {
@@ -111,7 +118,7 @@ float Sampler::next() {
 }
 
 Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& direction, int max_depth,
-                    Sampler& sampler, FirstHit* first) {
+                    Sampler& sampler, SampleAovs* first) {
   const LightChoice choice = light_choice(scene);
   const float offset = 1e-4f * scene.scene_radius();
   Spectrum radiance(0.0f), throughput(1.0f);
@@ -195,17 +202,12 @@ Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& di
   return radiance;
 }
 
-PathRender render_paths(const RenderScene& scene, const PathSettings& settings, std::atomic<std::size_t>* progress) {
-  const CameraDesc& cam = scene.desc().camera;
+PathRender render_paths(const RenderScene& scene, const RenderSettings& settings, std::atomic<std::size_t>* progress) {
+  const examples::PinholeCamera& cam = scene.desc().camera;
   std::vector<std::string> channels = {"R", "G", "B"};
   if (settings.aovs) channels.insert(channels.end(), {"albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z", "Z"});
   PathRender out;
   out.image = Image(cam.width, cam.height, channels);
-  const vec3 forward = glm::normalize(cam.target - cam.eye);
-  const vec3 right = glm::normalize(glm::cross(forward, cam.up));
-  const vec3 up = glm::cross(right, forward);
-  const float tan_half = std::tan(0.5f * glm::radians(cam.fov_degrees));
-  const float aspect = float(cam.width) / float(cam.height);
   const auto start = std::chrono::steady_clock::now();
   const TileGrid grid(cam.width, cam.height);
   parallel_for_tiles(grid, [&](const Tile& tile) {
@@ -213,14 +215,15 @@ PathRender render_paths(const RenderScene& scene, const PathSettings& settings, 
       for (int x = tile.x0; x < tile.x1; ++x) {
         const uint64_t pixel = uint64_t(y) * uint64_t(cam.width) + uint64_t(x);
         Spectrum sum(0.0f);
-        FirstHit aov_sum;
+        SampleAovs aov_sum;
         for (int s = 0; s < settings.spp; ++s) {
           Sampler sampler(settings.seed, pixel, uint64_t(s));
-          const float sx = (2.0f * (float(x) + sampler.next()) / float(cam.width) - 1.0f) * tan_half * aspect;
-          const float sy = (1.0f - 2.0f * (float(y) + sampler.next()) / float(cam.height)) * tan_half;
-          const vec3 dir = glm::normalize(forward + sx * right + sy * up);
-          FirstHit first;
-          const Spectrum l = trace_path(scene, cam.eye, dir, settings.max_depth, sampler, settings.aovs ? &first : nullptr);
+          const float u = sampler.next();  // in this order: x first, then y
+          const float v = sampler.next();
+          const Ray ray = cam.ray(x, y, u, v);
+          SampleAovs first;
+          const Spectrum l =
+              trace_path(scene, ray.origin, ray.direction, settings.max_depth, sampler, settings.aovs ? &first : nullptr);
           if (std::isfinite(l.x + l.y + l.z)) sum += l;  // a NaN sample would poison the pixel: dropped
           aov_sum.albedo += first.albedo;
           aov_sum.normal += first.normal;
@@ -248,6 +251,45 @@ PathRender render_paths(const RenderScene& scene, const PathSettings& settings, 
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.samples = uint64_t(cam.width) * uint64_t(cam.height) * uint64_t(settings.spp);
   return out;
+}
+
+int run_path_job(const PathJob& job, const std::string& description) {
+  const examples::ThreadLimit thread_limit(job.threads);
+  SceneDesc scene;
+  const bool is_scene = std::filesystem::path(job.input).extension() == ".json";
+  if (Status s = is_scene ? load_scene(job.input, scene) : default_scene(job.input, scene); !s.ok())
+    return examples::fail(kProgram, s.message());
+  if (job.set_width || !is_scene) scene.camera.width = job.width;
+  if (job.set_height || !is_scene) scene.camera.height = job.height;
+  if (job.spp > 0) scene.render.spp = job.spp;
+  if (job.max_depth > 0) scene.render.max_depth = job.max_depth;
+  if (job.seed >= 0) scene.render.seed = uint64_t(job.seed);
+  scene.render.aovs = job.aovs;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  RenderScene rs;
+  if (Status s = rs.build(scene); !s.ok()) return examples::fail(kProgram, s.message());
+  std::printf("%s: %s: %zu triangle meshes, %zu GWN objects; scene built in %.3f s\n", kProgram, job.input.c_str(),
+              scene.meshes.size(), scene.gwn_objects.size(), examples::seconds_since(t0));
+  std::fflush(stdout);
+
+  const RenderSettings& settings = scene.render;
+  std::atomic<size_t> progress{0};
+  PathRender result;
+  {
+    examples::ProgressBar bar(progress, size_t(scene.camera.width) * size_t(scene.camera.height), "px");
+    result = render_paths(rs, settings, &progress);
+  }
+  const double pixels = double(scene.camera.width) * double(scene.camera.height);
+  std::printf("%s: %dx%d, %d spp in %.2f s on %s: %.3f us per sample per pixel (%s samples/s)\n", kProgram,
+              scene.camera.width, scene.camera.height, settings.spp, result.seconds,
+              count_of(thread_limit.workers(), "thread").c_str(), 1e6 * result.seconds / (pixels * settings.spp),
+              examples::human_count(double(result.samples) / result.seconds).c_str());
+  const bool png = image_format_for(job.output) == ImageFormat::kPng;
+  if (Status s = write_image(job.output, png ? tone_mapped(result.image) : result.image, description); !s.ok())
+    return examples::fail(kProgram, s.message());
+  std::printf("%s: wrote %s\n", kProgram, job.output.c_str());
+  return 0;
 }
 
 }  // namespace gwnrt::render

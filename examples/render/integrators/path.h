@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include "image.h"
 #include "render_scene.h"
@@ -24,15 +25,8 @@ class Sampler {
   uint64_t state_ = 0, increment_ = 1;
 };
 
-struct PathSettings {
-  int spp = 16;
-  int max_depth = 8;
-  uint64_t seed = 1;
-  bool aovs = false;  // also albedo, normal and depth of the first hit
-};
-
 // What one camera sample found at its first hit (AOVs).
-struct FirstHit {
+struct SampleAovs {
   Spectrum albedo{0.0f};
   vec3 normal{0.0f};
   float depth = 0.0f;  // 0 for a miss
@@ -40,7 +34,7 @@ struct FirstHit {
 
 // Radiance along one camera ray.
 Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& direction, int max_depth,
-                    Sampler& sampler, FirstHit* first = nullptr);
+                    Sampler& sampler, SampleAovs* first = nullptr);
 
 struct PathRender {
   Image image;  // R, G, B (linear); with AOVs also albedo.R/G/B, N.X/Y/Z, Z
@@ -48,8 +42,26 @@ struct PathRender {
   uint64_t samples = 0;
 };
 
-// Renders the scene's camera. `progress`, when given, counts finished pixels.
-PathRender render_paths(const RenderScene& scene, const PathSettings& settings,
+// Renders the scene's camera (its pixels; samples, depth and seed from `settings`, not from the
+// scene). `progress`, when given, counts finished pixels.
+PathRender render_paths(const RenderScene& scene, const RenderSettings& settings,
                         std::atomic<std::size_t>* progress = nullptr);
+
+// What `gwnrt-render` (the path integrator) was asked for, every option already checked: a scene
+// file or a mesh (rendered in its default scene), and what overrides the scene's own settings.
+struct PathJob {
+  std::string input;   // .json: a scene file; else a mesh
+  std::string output;  // the image (.png: tone-mapped; .exr: linear)
+  int width = 800, height = 600;               // a mesh's image size; a scene's when set_*
+  bool set_width = false, set_height = false;
+  int spp = 0, max_depth = 0;  // 0: the scene's
+  int64_t seed = -1;           // negative: the scene's
+  bool aovs = false;           // EXR only
+  int threads = 0;             // 0: all cores
+};
+
+// Loads (or makes) the scene, builds it in Embree, renders it with a progress bar, prints the time
+// per sample per pixel and writes the image. Returns the exit status.
+int run_path_job(const PathJob& job, const std::string& description);
 
 }  // namespace gwnrt::render
