@@ -20,9 +20,7 @@
 #include "test_util.h"
 
 #ifdef GWNRT_HAVE_EMBREE
-#include <embree3/rtcore.h>
-
-#include "embree_ray.h"
+#include "embree_triangles.h"
 #endif
 
 namespace gwnrt {
@@ -167,37 +165,14 @@ struct EmbreeHit {
 // mode and without back-face culling.
 class EmbreeScene {
  public:
-  explicit EmbreeScene(const Mesh& m) {
-    device_ = rtcNewDevice("threads=1");
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(
-        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
-    for (size_t i = 0; i < m.positions.size(); ++i)
-      for (int k = 0; k < 3; ++k) v[3 * i + k] = m.positions[i][k];
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               3 * sizeof(unsigned), m.triangles.size()));
-    for (size_t i = 0; i < m.triangles.size(); ++i)
-      for (int k = 0; k < 3; ++k) idx[3 * i + k] = m.triangles[i][k];
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(scene_, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(scene_);
+  explicit EmbreeScene(const Mesh& m) : scene_(m, 1, RTC_SCENE_FLAG_ROBUST, RTC_BUILD_QUALITY_HIGH) {
+    EXPECT_TRUE(scene_.status().ok()) << scene_.status().message();
   }
-  ~EmbreeScene() {
-    rtcReleaseScene(scene_);
-    rtcReleaseDevice(device_);
-  }
-  EmbreeScene(const EmbreeScene&) = delete;
-  EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   EmbreeHit intersect(const Ray& r) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rh = examples::embree_ray_hit(r);
-    rtcIntersect1(scene_, &context, &rh);
+    const RTCRayHit rh = scene_.intersect(r, context);
     EmbreeHit h;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
     h.hit = true;
@@ -209,8 +184,7 @@ class EmbreeScene {
   }
 
  private:
-  RTCDevice device_;
-  RTCScene scene_;
+  examples::TriangleScene scene_;
 };
 
 // Rays for a closed mesh: origins outside aimed at the box, origins outside in any direction, and

@@ -34,13 +34,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#if defined(GWNRT_HAVE_EMBREE)
-#include <embree3/rtcore.h>
-#endif
-
 #include "brute_force_trace.h"
 #include "camera.h"
-#include "embree_ray.h"
+#if defined(GWNRT_HAVE_EMBREE)
+#include "embree_triangles.h"
+#endif
 #include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
@@ -77,65 +75,21 @@ struct SimpleHit {
 
 #if defined(GWNRT_HAVE_EMBREE)
 
-// The mesh as one Embree triangle geometry (buffers copied: Embree wants its vertex buffer
-// padded, which a std::vector<vec3> is not).
-class EmbreeScene {
- public:
-  EmbreeScene(const Mesh& mesh, int threads) {
-    const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
-    device_ = rtcNewDevice(config.empty() ? nullptr : config.c_str());
-    if (!device_) die("rtcNewDevice failed (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
-    scene_ = rtcNewScene(device_);
-    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                 3 * sizeof(float), mesh.positions.size()));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), mesh.triangles.size()));
-    if (!vertices || !indices) die("Embree could not allocate the geometry buffers");
-    for (size_t i = 0; i < mesh.positions.size(); ++i)
-      for (int k = 0; k < 3; ++k) vertices[3 * i + k] = mesh.positions[i][k];
-    for (size_t i = 0; i < mesh.triangles.size(); ++i)
-      for (int k = 0; k < 3; ++k) indices[3 * i + k] = mesh.triangles[i][k];
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene_, geometry);
-    rtcReleaseGeometry(geometry);
-    const auto t0 = clock_type::now();
-    rtcCommitScene(scene_);
-    build_seconds_ = seconds_since(t0);
-    if (const RTCError e = rtcGetDeviceError(device_); e != RTC_ERROR_NONE)
-      die("Embree error " + std::to_string(int(e)) + " while building the scene");
-  }
-  ~EmbreeScene() {
-    rtcReleaseScene(scene_);
-    rtcReleaseDevice(device_);
-  }
-  EmbreeScene(const EmbreeScene&) = delete;
-  EmbreeScene& operator=(const EmbreeScene&) = delete;
-
-  double build_seconds() const { return build_seconds_; }
-
-  // All rays, in parallel; returns the seconds taken.
-  double trace(const std::vector<Ray>& rays, std::vector<SimpleHit>& hits) const {
-    hits.assign(rays.size(), SimpleHit{});
-    const auto t0 = clock_type::now();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      RTCIntersectContext context;
-      rtcInitIntersectContext(&context);
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        const Ray& r = rays[i];
-        RTCRayHit rh = examples::embree_ray_hit(r);
-        rtcIntersect1(scene_, &context, &rh);
-        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) hits[i] = {true, rh.ray.tfar};
-      }
-    });
-    return seconds_since(t0);
-  }
-
- private:
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
-  double build_seconds_ = 0;
-};
+// All rays through Embree's rtcIntersect1 on the mesh's triangles, in parallel; returns the
+// seconds taken.
+double trace_embree(const examples::TriangleScene& embree, const std::vector<Ray>& rays, std::vector<SimpleHit>& hits) {
+  hits.assign(rays.size(), SimpleHit{});
+  const auto t0 = clock_type::now();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const RTCRayHit rh = embree.intersect(rays[i], context);
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) hits[i] = {true, rh.ray.tfar};
+    }
+  });
+  return seconds_since(t0);
+}
 
 #endif  // GWNRT_HAVE_EMBREE
 
@@ -349,9 +303,10 @@ int main(int argc, char** argv) {
     std::vector<SimpleHit> ehits;
 #if defined(GWNRT_HAVE_EMBREE)
     {
-      EmbreeScene embree(model.mesh(), threads);
+      const examples::TriangleScene embree(model.mesh(), threads);
+      if (Status st = embree.status(); !st.ok()) die(st.message());
       std::printf("; Embree build %.3f s\n", embree.build_seconds());
-      sum.a = best_of_3(rays.size(), [&] { return embree.trace(rays, ehits); });
+      sum.a = best_of_3(rays.size(), [&] { return trace_embree(embree, rays, ehits); });
     }
 #else
     std::printf("\n");

@@ -1,6 +1,7 @@
 #include "render_scene.h"
 
 #include "embree_ray.h"
+#include "embree_triangles.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,23 +15,6 @@ Status embree_status(RTCDevice device, const std::string& what) {
   const RTCError e = rtcGetDeviceError(device);
   if (e == RTC_ERROR_NONE) return Status::Ok();
   return {StatusCode::kInternal, what + ": Embree error " + std::to_string(int(e))};
-}
-
-RTCGeometry triangle_geometry(RTCDevice device, const Mesh& mesh) {
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(
-      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    v[3 * i] = mesh.positions[i].x;
-    v[3 * i + 1] = mesh.positions[i].y;
-    v[3 * i + 2] = mesh.positions[i].z;
-  }
-  auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                           3 * sizeof(unsigned), mesh.triangles.size()));
-  for (size_t i = 0; i < mesh.triangles.size(); ++i)
-    for (int k = 0; k < 3; ++k) t[3 * i + k] = mesh.triangles[i][k];
-  rtcCommitGeometry(g);
-  return g;
 }
 
 }  // namespace
@@ -52,7 +36,11 @@ Status RenderScene::build(const SceneDesc& desc) {
     for (const uvec3& t : m.mesh.triangles)
       if (t.x >= m.mesh.positions.size() || t.y >= m.mesh.positions.size() || t.z >= m.mesh.positions.size())
         return {StatusCode::kInvalidMesh, m.source + ": a triangle index is out of range"};
-    RTCGeometry g = triangle_geometry(device_, m.mesh);
+    RTCGeometry g = examples::new_triangle_geometry(device_, m.mesh);
+    if (!g) {
+      return {StatusCode::kInternal, m.source + ": Embree cannot make its triangle geometry (error " +
+                                         std::to_string(int(rtcGetDeviceError(device_))) + ")"};
+    }
     const unsigned id = rtcAttachGeometry(scene_, g);
     rtcReleaseGeometry(g);
     if (top_.size() <= id) top_.resize(id + 1);

@@ -22,8 +22,9 @@
 #include <vector>
 
 #include "../test_util.h"
-#include "embree_ray.h"
 #include "camera.h"
+#include "embree_ray.h"
+#include "embree_triangles.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/embree.h"
 #include "gwnrt/trace/surface_trace.h"
@@ -107,18 +108,6 @@ RTCGeometry gwn_geometry(RTCDevice device, const Mesh& m, const GWNRTOptions* op
   RTCGeometry g = gwnrtNewGeometry(device, mesh, options);
   EXPECT_NE(g, nullptr) << gwnrtGetLastError();
   gwnrtReleaseMesh(mesh);
-  return g;
-}
-
-// Embree's own triangles over the same floats.
-RTCGeometry triangle_geometry(RTCDevice device, const Mesh& m) {
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(
-      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
-  std::memcpy(v, xyz_of(m), 3 * sizeof(float) * m.positions.size());
-  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                             3 * sizeof(uint32_t), m.triangles.size()));
-  std::memcpy(idx, indices_of(m), 3 * sizeof(uint32_t) * m.triangles.size());
   return g;
 }
 
@@ -434,7 +423,7 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
   Scene a(device), b(device);
   constexpr unsigned kGwnId = 5;  // not 0: the reported geomID must be the attached one
   ASSERT_EQ(a.attach(gwn_geometry(device.get(), mesh), kGwnId), kGwnId);
-  const unsigned tri_id = b.attach(triangle_geometry(device.get(), mesh));
+  const unsigned tri_id = b.attach(examples::new_triangle_geometry(device.get(), mesh));
   a.commit();
   b.commit();
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
@@ -950,7 +939,7 @@ void check_filters(bool as_context_filter) {
   Device device;
   Scene triangles(device);
   triangles.attach([&] {
-    RTCGeometry g = triangle_geometry(device.get(), mesh);
+    RTCGeometry g = examples::new_triangle_geometry(device.get(), mesh);
     rtcSetGeometryIntersectFilterFunction(g, record_filter);
     return g;
   }());
@@ -1066,7 +1055,7 @@ TEST(EmbreePlugin, FiltersInsideInstancesSeeInstanceId) {
   Device device;
   Scene gwn_object(device), tri_object(device);
   for (auto [scene, g] : {std::pair{&gwn_object, gwn_geometry(device.get(), mesh)},
-                          std::pair{&tri_object, triangle_geometry(device.get(), mesh)}}) {
+                          std::pair{&tri_object, examples::new_triangle_geometry(device.get(), mesh)}}) {
     rtcSetGeometryIntersectFilterFunction(g, record_filter);
     rtcSetGeometryOccludedFilterFunction(g, record_filter);
     scene->attach(g);
@@ -1157,7 +1146,7 @@ TEST(EmbreePlugin, ThreadsGiveIdenticalResults) {
   // A sphere cutting through the bunny's side, beside the GWN object in the same scene.
   Mesh sphere = test::make_sphere(2, float(0.2 * diag));
   for (vec3& p : sphere.positions) p += vec3(box.hi.x, box.centre().y, box.centre().z);
-  scene.attach(triangle_geometry(device.get(), sphere));
+  scene.attach(examples::new_triangle_geometry(device.get(), sphere));
   scene.commit();
   Aabb both = box;
   both.extend(test::mesh_bounds(sphere));
