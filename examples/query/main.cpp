@@ -16,7 +16,6 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 
 #include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
@@ -26,6 +25,7 @@
 #include "csv_writer.h"
 #include "load_model.h"
 #include "point_io.h"
+#include "program.h"
 #include "progress_bar.h"
 
 #if defined(GWNRT_HAVE_CUDA)
@@ -36,15 +36,11 @@ namespace {
 
 using gwnrt::PointResult;
 using gwnrt::examples::CsvWriter;
+using gwnrt::examples::fail;
 using gwnrt::examples::seconds_since;
 using gwnrt::vec3;
 
 constexpr const char* kProgram = "gwnrt-query";
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
-  return 1;
-}
 
 // An output of --fields: what evaluate_point must compute for it, its CSV columns and how to
 // write them. "all" is every field before the signed-distance ones, which need a level.
@@ -211,7 +207,7 @@ int main(int argc, char** argv) {
       fields |= kFields[f].request_bits;
     }
   }
-  if (fields == 0) return fail("no fields requested");
+  if (fields == 0) return fail(kProgram, "no fields requested");
 
   const bool chatty = verbose || ::isatty(2) == 1;
 
@@ -229,23 +225,23 @@ int main(int argc, char** argv) {
 #if defined(GWNRT_HAVE_CUDA)
   if (use_cuda) {
     std::string why;
-    if (!gwnrt::cuda::device_available(&why)) return fail("--device cuda: no usable CUDA device: " + why);
+    if (!gwnrt::cuda::device_available(&why)) return fail(kProgram, "--device cuda: no usable CUDA device: " + why);
   }
 #else
   if (use_cuda) {
-    return fail("--device cuda: this gwnrt-query was built without the CUDA backend "
-                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
+    return fail(kProgram, "--device cuda: this gwnrt-query was built without the CUDA backend "
+                          "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
   }
 #endif
 
-  std::optional<tbb::global_control> thread_limit;
-  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  const gwnrt::examples::ThreadLimit thread_limit(threads);
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
-  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
+  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok())
+    return fail(kProgram, s.message());
   if (level != model.sheet_level()) {
-    if (gwnrt::Status s = model.set_sheet_level(level); !s.ok()) return fail(s.message());
+    if (gwnrt::Status s = model.set_sheet_level(level); !s.ok()) return fail(kProgram, s.message());
   }
   const gwnrt::MeshLoadReport& report = loaded.report;
   const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
@@ -262,16 +258,17 @@ int main(int argc, char** argv) {
   }
 
   std::vector<vec3> points;
-  if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points); !s.ok()) return fail(s.message());
+  if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points); !s.ok()) return fail(kProgram, s.message());
 
   std::vector<PointResult> results(points.size());
   const auto t_eval = std::chrono::steady_clock::now();
   if (use_cuda) {
 #if defined(GWNRT_HAVE_CUDA)
     gwnrt::cuda::DeviceModel device_model;
-    if (gwnrt::Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok()) return fail(s.message());
+    if (gwnrt::Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok())
+      return fail(kProgram, s.message());
     if (gwnrt::Status s = gwnrt::cuda::evaluate_points(device_model, points, request, results); !s.ok()) {
-      return fail(s.message());
+      return fail(kProgram, s.message());
     }
 #endif
   } else {
@@ -281,7 +278,7 @@ int main(int argc, char** argv) {
       gwnrt::examples::ProgressBar bar(progress, points.size(), "pts");
       s = gwnrt::evaluate_points(model, points, request, results, &progress);
     }
-    if (!s.ok()) return fail(s.message());
+    if (!s.ok()) return fail(kProgram, s.message());
   }
   if (chatty) {
     const double t = seconds_since(t_eval);
@@ -291,12 +288,12 @@ int main(int argc, char** argv) {
 
   const bool to_stdout = output_path == "-";
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
-  if (!out) return fail(output_path + ": cannot open for writing: " + std::strerror(errno));
+  if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
   CsvWriter csv(out);
   write_csv(csv, selected, points, results);
   bool ok = csv.flush();
   ok = (std::fflush(out) == 0) && ok;
   if (!to_stdout) ok = (std::fclose(out) == 0) && ok;
-  if (!ok) return fail((to_stdout ? std::string("<stdout>") : output_path) + ": write error");
+  if (!ok) return fail(kProgram, (to_stdout ? std::string("<stdout>") : output_path) + ": write error");
   return 0;
 }

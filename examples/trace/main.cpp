@@ -13,7 +13,6 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 
 #include "csv_writer.h"
 #include "load_model.h"
@@ -21,6 +20,7 @@
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
 #include "point_io.h"
+#include "program.h"
 #include "progress_bar.h"
 #include "trace_level.h"
 
@@ -36,14 +36,10 @@ using gwnrt::Status;
 using gwnrt::StatusCode;
 using gwnrt::vec3;
 using gwnrt::examples::CsvWriter;
+using gwnrt::examples::fail;
 using gwnrt::examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-trace";
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
-  return 1;
-}
 
 // One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf.
 Status read_rays(const std::string& path, std::vector<Ray>& rays) {
@@ -135,30 +131,29 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   gwnrt::examples::set_trace_surface(mode, level, options);
-  if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(s.message());
+  if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(kProgram, s.message());
   const bool chatty = verbose || ::isatty(2) == 1;
 
   const bool use_cuda = device == "cuda";
 #if defined(GWNRT_HAVE_CUDA)
   if (use_cuda) {
     std::string why;
-    if (!gwnrt::cuda::device_available(&why)) return fail("--device cuda: " + why);
+    if (!gwnrt::cuda::device_available(&why)) return fail(kProgram, "--device cuda: " + why);
   }
 #else
   if (use_cuda)
-    return fail("--device cuda: this gwnrt-trace was built without the CUDA backend "
-                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
+    return fail(kProgram, "--device cuda: this gwnrt-trace was built without the CUDA backend "
+                          "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
 #endif
 
-  std::optional<tbb::global_control> thread_limit;
-  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  const gwnrt::examples::ThreadLimit thread_limit(threads);
 
   std::vector<Ray> rays;
-  if (Status s = read_rays(rays_path, rays); !s.ok()) return fail(s.message());
+  if (Status s = read_rays(rays_path, rays); !s.ok()) return fail(kProgram, s.message());
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
-  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(s.message());
+  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(kProgram, s.message());
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),
@@ -169,8 +164,9 @@ int main(int argc, char** argv) {
   if (use_cuda) {
 #if defined(GWNRT_HAVE_CUDA)
     gwnrt::cuda::DeviceModel device_model;
-    if (Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok()) return fail(s.message());
-    if (Status s = gwnrt::cuda::trace_rays(device_model, rays, options, hits); !s.ok()) return fail(s.message());
+    if (Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok()) return fail(kProgram, s.message());
+    if (Status s = gwnrt::cuda::trace_rays(device_model, rays, options, hits); !s.ok())
+      return fail(kProgram, s.message());
 #endif
   } else {
     std::atomic<size_t> progress{0};
@@ -179,7 +175,7 @@ int main(int argc, char** argv) {
       gwnrt::examples::ProgressBar bar(progress, rays.size(), "rays");
       s = gwnrt::trace_rays(model, rays, options, hits, &progress);
     }
-    if (!s.ok()) return fail(s.message());
+    if (!s.ok()) return fail(kProgram, s.message());
   }
   const double trace_seconds = seconds_since(t_trace);
 
@@ -201,12 +197,12 @@ int main(int argc, char** argv) {
 
   const bool to_stdout = output_path == "-";
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
-  if (!out) return fail(output_path + ": cannot open for writing: " + std::strerror(errno));
+  if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
   CsvWriter csv(out);
   write_csv(csv, hits);
   bool ok = csv.flush();
   ok = (std::fflush(out) == 0) && ok;
   if (!to_stdout) ok = (std::fclose(out) == 0) && ok;
-  if (!ok) return fail((to_stdout ? std::string("<stdout>") : output_path) + ": write error");
+  if (!ok) return fail(kProgram, (to_stdout ? std::string("<stdout>") : output_path) + ": write error");
   return 0;
 }
