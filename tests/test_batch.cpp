@@ -14,6 +14,7 @@
 #include <tbb/global_control.h>
 
 #include "gwnrt/field/winding_number.h"
+#include "exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -191,23 +192,6 @@ TEST(ModelBuild, RejectsInvalidMeshesWithAReason) {
   expect_rejected(bad_index, "triangle 7");
 }
 
-// Brute-force unsigned distance in double. Zero-area triangles are measured as their three
-// edges, so the reference does not depend on how closest_point_on_triangle treats them.
-double brute_distance(const Mesh& m, const vec3& xf) {
-  const dvec3 x(xf);
-  double best = std::numeric_limits<double>::infinity();
-  for (const uvec3& t : m.triangles) {
-    const dvec3 p[3] = {dvec3(m.positions[t[0]]), dvec3(m.positions[t[1]]), dvec3(m.positions[t[2]])};
-    if (is_degenerate_triangle(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]])) {
-      for (int k = 0; k < 3; ++k)
-        best = std::min(best, glm::length(closest_point_on_segment(p[k], p[(k + 1) % 3], x).point - x));
-    } else {
-      best = std::min(best, glm::length(closest_point_on_triangle(p[0], p[1], p[2], x).point - x));
-    }
-  }
-  return best;
-}
-
 // Runs every field on a tiny mesh, exact and by the tree, and checks the distances against
 // brute force; returns the results of both runs for mesh-specific checks.
 void check_tiny_mesh(const Mesh& mesh, const std::function<void(const vec3&, const PointResult&, bool exact)>& more) {
@@ -224,7 +208,7 @@ void check_tiny_mesh(const Mesh& mesh, const std::function<void(const vec3&, con
     for (size_t i = 0; i < points.size(); ++i) {
       SCOPED_TRACE("point " + std::to_string(i));
       // Float distances of O(1) coordinates.
-      EXPECT_NEAR(results[i].unsigned_distance, brute_distance(mesh, points[i]), 1e-5);
+      EXPECT_NEAR(results[i].unsigned_distance, reference::mesh_distance(mesh, dvec3(points[i])), 1e-5);
       EXPECT_LT(results[i].nearest_triangle, mesh.triangles.size());
       more(points[i], results[i], exact);
     }

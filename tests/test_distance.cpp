@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "gwnrt/field/distance.h"
+#include "exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -18,6 +19,11 @@ using test::make_cube;
 using test::make_sphere;
 using test::mesh_bounds;
 using test::sample_points;
+// The brute-force references of the distance queries (zero-area triangles as their three edges,
+// where ClosestPointOnTriangle.ZeroArea* shows closest_point_on_triangle to be unreliable).
+using reference::boundary_distance;
+using reference::mesh_distance;
+using reference::triangle_distance;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -180,36 +186,6 @@ TEST(ClosestPointOnSegment, MatchesDenseSampling) {
   EXPECT_EQ(c.u, 0.0);
 }
 
-// Distance in double from x to triangle `id` of the float mesh. Zero-area triangles are
-// measured as their three edges, so the reference does not lean on closest_point_on_triangle
-// where ClosestPointOnTriangle.ZeroArea* shows it to be unreliable.
-double triangle_distance(const Mesh& m, uint32_t id, const dvec3& x) {
-  const uvec3 t = m.triangles[id];
-  const dvec3 p[3] = {dvec3(m.positions[t[0]]), dvec3(m.positions[t[1]]), dvec3(m.positions[t[2]])};
-  if (!is_degenerate_triangle(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
-    return glm::length(closest_point_on_triangle(p[0], p[1], p[2], x).point - x);
-  double best = kInf;
-  for (int k = 0; k < 3; ++k)
-    best = std::min(best, glm::length(closest_point_on_segment(p[k], p[(k + 1) % 3], x).point - x));
-  return best;
-}
-
-double brute_triangle_distance(const Mesh& m, const dvec3& x) {
-  double best = kInf;
-  for (uint32_t id = 0; id < m.triangles.size(); ++id) best = std::min(best, triangle_distance(m, id, x));
-  return best;
-}
-
-double brute_boundary_distance(const BoundaryCurve& curve, const dvec3& x) {
-  double best = kInf;
-  for (size_t s = 0; s < curve.segment_count(); ++s) {
-    const ClosestPoint<double> c =
-        closest_point_on_segment(dvec3(curve.endpoints[2 * s]), dvec3(curve.endpoints[2 * s + 1]), x);
-    best = std::min(best, glm::dot(c.point - x, c.point - x));
-  }
-  return std::sqrt(best);
-}
-
 class DistanceOnRealMeshes : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(DistanceOnRealMeshes, UnsignedDistanceMatchesBruteForce) {
@@ -225,7 +201,7 @@ TEST_P(DistanceOnRealMeshes, UnsignedDistanceMatchesBruteForce) {
   for (size_t i = 0; i < points.size(); ++i) {
     const dvec3 x(points[i]);
     const NearestPrimitive n = unsigned_distance(view, points[i]);
-    const double ref = brute_triangle_distance(mesh, x);
+    const double ref = mesh_distance(mesh, x);
     SCOPED_TRACE("point " + std::to_string(i));
     ASSERT_LT(n.primitive, mesh.triangles.size());
     EXPECT_NEAR(n.distance, ref, tol);
@@ -261,7 +237,7 @@ TEST_P(DistanceOnRealMeshes, BoundaryDistanceMatchesBruteForce) {
       EXPECT_EQ(n.primitive, kEmptyLane);
       continue;
     }
-    const double ref = brute_boundary_distance(curve, x);
+    const double ref = boundary_distance(curve, x);
     EXPECT_NEAR(n.distance, ref, tol);
     ASSERT_LT(n.primitive, curve.segment_count());
     const double id_dist = glm::length(
@@ -305,7 +281,7 @@ TEST(BoundaryDistance, OpenCubeIsTheDistanceToItsRim) {
     else planar = std::sqrt(dx * dx + dy * dy);
     // Float query with O(1) coordinates.
     EXPECT_NEAR(n.distance, std::sqrt(planar * planar + dz * dz), 1e-5);
-    EXPECT_NEAR(n.distance, brute_boundary_distance(model.boundary(), dvec3(x)), 1e-5);
+    EXPECT_NEAR(n.distance, boundary_distance(model.boundary(), dvec3(x)), 1e-5);
   }
 }
 

@@ -21,13 +21,14 @@
 
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/mesh_io.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string data_path(const char* name) { return std::string(GWNRT_TEST_DATA_DIR) + "/" + name; }
+using test::data_path;
 
 // Shortest text that reads back to the same float, so text formats round-trip exactly.
 std::string num(float v) {

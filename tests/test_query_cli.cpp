@@ -31,7 +31,7 @@ using test::temp_path;
 std::string query_binary() { return test::example_binary("gwnrt-query"); }
 
 std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
-std::string probe_points_path() { return test::data_path("../../examples/data/bunny_probe_points.txt"); }
+std::string probe_points_path() { return test::data_path("bunny_probe_points.txt"); }
 
 RunResult run_query(const std::string& binary, const std::string& args, const std::string& stdin_path = "") {
   return test::run_program(binary, args, stdin_path);

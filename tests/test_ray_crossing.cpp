@@ -11,6 +11,7 @@
 
 #include "gwnrt/trace/ray.h"
 #include "gwnrt/trace/surface_trace.h"
+#include "brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -228,7 +229,7 @@ TEST(RayCrossing, ClosedMeshCrossingSumsAreWindingNumbers) {
   const GwnModel model = build_model(mesh);
   ASSERT_EQ(model.boundary().segment_count(), 0u);
   const TriangleTreeView tree = model.triangle_view();
-  const test::ReferenceMesh ref = test::reference_mesh(mesh);
+  const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
   const Aabb box = model.bounds();
   const float diag = glm::length(box.hi - box.lo);
   std::mt19937 rng(601);
@@ -246,7 +247,7 @@ TEST(RayCrossing, ClosedMeshCrossingSumsAreWindingNumbers) {
     EXPECT_EQ(crossing_sum(tree.bvh, tree.vertices, f, t0 - 1.0f, t1 + 1.0f), 0);
     for (int k = 0; k < 10; ++k) {
       const float s = t0 + (t1 - t0) * (float(k) + 0.5f) / 10.0f;
-      const double w = test::reference_w(ref, dvec3(o) + double(s) * dvec3(d));
+      const double w = reference::reference_w(ref, dvec3(o) + double(s) * dvec3(d));
       if (std::fabs(w - std::round(w)) > 1e-3) continue;
       EXPECT_EQ(crossing_sum(tree.bvh, tree.vertices, f, t0 - 1.0f, s), int(std::round(w))) << "at t = " << s;
       ++checked;

@@ -2,7 +2,7 @@
 // sheets, the pseudo-SDF and its curvature correction, Newton projection and the Harnack lower
 // bound, each against a reference that does not go through the code under test: analytic
 // distances (sphere, the flat disk that caps a hemisphere), the winding number on the axis of a
-// hemisphere in closed form, brute-force double sums of w (test_util.h's reference_w) and
+// hemisphere in closed form, brute-force double sums of w (brute_force_winding.h) and
 // brute-force distances to triangles.
 #include <algorithm>
 #include <cmath>
@@ -14,6 +14,8 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "gwnrt/sdf/signed_distance.h"
+#include "brute_force_winding.h"
+#include "exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -21,6 +23,9 @@ namespace {
 
 using test::build_model;
 using test::make_sphere;
+// The distance to the sheet triangles by brute force: the callers pass meshes whose triangles are
+// all sheets.
+using reference::mesh_distance;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
@@ -62,19 +67,6 @@ dvec3 centroid(const Mesh& m, size_t t) {
           dvec3(m.positions[m.triangles[t][2]])) / 3.0;
 }
 
-// Brute-force distance in double from x to the triangles of `m` (all of them: the callers pass
-// meshes whose triangles are all sheets). closest_point_on_triangle is checked against dense
-// sampling in test_distance.cpp; here it is run in double over every triangle, no tree.
-double brute_distance(const Mesh& m, const dvec3& x) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const uvec3& t : m.triangles) {
-    const ClosestPoint<double> c =
-        closest_point_on_triangle(dvec3(m.positions[t[0]]), dvec3(m.positions[t[1]]), dvec3(m.positions[t[2]]), x);
-    best = std::min(best, glm::length(c.point - x));
-  }
-  return best;
-}
-
 // The largest gap between a polyhedron inscribed in the unit sphere and the sphere: 1 minus the
 // smallest distance from the origin to a facet's plane. The polyhedron lies between radius
 // 1 - sag and 1, so its distance from x differs from ||x| - 1| by at most `sag`.
@@ -94,10 +86,10 @@ double chord_sag(const Mesh& m) {
 // half-ball polyhedron and S = H ∪ D: the shell triangles (sheets) and the smooth piece D.
 struct HemisphereReference {
   Mesh mesh;
-  test::ReferenceMesh exact;
+  reference::ReferenceMesh exact;
   std::vector<glm::dvec2> rim;  // counter-clockwise seen from +z
   explicit HemisphereReference(int rings, int segments) : mesh(make_hemisphere(rings, segments)) {
-    exact = test::reference_mesh(mesh);
+    exact = reference::reference_mesh(mesh);
     for (int j = 0; j < segments; ++j) {
       const vec3 p = mesh.positions[1 + (rings - 1) * segments + j];
       rim.push_back({p.x, p.y});
@@ -110,14 +102,14 @@ struct HemisphereReference {
     }
     return true;
   }
-  double shell_distance(const dvec3& x) const { return brute_distance(mesh, x); }
+  double shell_distance(const dvec3& x) const { return mesh_distance(mesh, x); }
   // The distance to D: |z| above or below it; elsewhere its nearest point is on the rim, which
   // belongs to the shell, so the shell's distance covers it.
   double disk_distance(const dvec3& x) const {
     return over_disk(x) ? std::fabs(x.z) : std::numeric_limits<double>::infinity();
   }
   double distance(const dvec3& x) const { return std::min(shell_distance(x), disk_distance(x)); }
-  bool inside(const dvec3& x) const { return test::reference_w(exact, x) > 0.5; }
+  bool inside(const dvec3& x) const { return reference::reference_w(exact, x) > 0.5; }
   double signed_distance(const dvec3& x) const { return inside(x) ? -distance(x) : distance(x); }
 };
 
@@ -167,10 +159,10 @@ std::string str(const vec3& x) {
 // triangle while its own term jumps by ±1 symmetrically, so w_o = (w(c + δn) + w(c - δn)) / 2,
 // both from the brute-force double sum. δ = 1e-7 moves the own term off ±1/2 by O(δ/edge) and
 // the others by O(δ·|∇w_o|): both far below the tolerance.
-double reference_other_winding(const test::ReferenceMesh& r, const Mesh& m, size_t t) {
+double reference_other_winding(const reference::ReferenceMesh& r, const Mesh& m, size_t t) {
   const dvec3 c = centroid(m, t), n = unit_normal(m, t);
   constexpr double delta = 1e-7;
-  return 0.5 * (test::reference_w(r, c + delta * n) + test::reference_w(r, c - delta * n));
+  return 0.5 * (reference::reference_w(r, c + delta * n) + reference::reference_w(r, c - delta * n));
 }
 
 // What the classification must get right, for one level, against the reference w_o of every
@@ -223,7 +215,7 @@ ClassificationStats check_classification(const GwnModel& model, const Mesh& mesh
   return stats;
 }
 
-std::vector<double> reference_other_windings(const Mesh& mesh, const test::ReferenceMesh& ref) {
+std::vector<double> reference_other_windings(const Mesh& mesh, const reference::ReferenceMesh& ref) {
   std::vector<double> out(mesh.triangles.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const dvec3 a(mesh.positions[mesh.triangles[t][0]]), b(mesh.positions[mesh.triangles[t][1]]),
@@ -247,7 +239,7 @@ TEST(Sheets, ClosedSphereEveryTriangleIsASheetWithOtherWindingOneHalf) {
   // sheet for w* in (0, 1) and none for w* outside [0, 1].
   const Mesh mesh = make_sphere(3);
   GwnModel model = build_model(mesh);
-  const test::ReferenceMesh ref = test::reference_mesh(mesh);
+  const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
   const std::vector<double> reference = reference_other_windings(mesh, ref);
   for (size_t t = 0; t < mesh.triangles.size(); ++t) EXPECT_NEAR(reference[t], 0.5, 1e-6) << "reference, triangle " << t;
   EXPECT_EQ(model.sheet_level(), 0.5f);
@@ -440,7 +432,7 @@ TEST(SignedDistance, ClosedSphereIsRadiusMinusOneToTheChordSag) {
     const double radius = glm::length(x);
     const float sdf = r[i].sdf.distance;
     EXPECT_EQ(r[i].sdf.piece, DistancePiece::kSheet) << str(points[i]);
-    const double brute = brute_distance(mesh, x);
+    const double brute = mesh_distance(mesh, x);
     worst_brute = std::max(worst_brute, std::fabs(std::fabs(sdf) - brute));
     worst_analytic = std::max(worst_analytic, std::fabs(sdf - (radius - 1.0)));
     EXPECT_NEAR(std::fabs(sdf), brute, 2e-6) << str(points[i]);
@@ -480,13 +472,13 @@ TEST(SignedDistance, HemisphereAxisWindingNumberMatchesClosedForm) {
     const float tree = winding_number(v.triangles, x, TaylorOptions{}).w;
     worst_tree = std::max(worst_tree, std::fabs(tree - exact));
     EXPECT_NEAR(tree, exact, 2e-3) << "z " << z;
-    EXPECT_NEAR(test::reference_w(h.exact, dvec3(x)), exact, 1e-12);  // two independent double sums
+    EXPECT_NEAR(reference::reference_w(h.exact, dvec3(x)), exact, 1e-12);  // two independent double sums
   }
   // w = 1/2 on the whole disk (the symmetry argument of HemisphereReference), off the axis too.
   test::Random rng(4);
   for (int k = 0; k < 50; ++k) {
     const vec3 x(rng.uniform(-0.7f, 0.7f), rng.uniform(-0.7f, 0.7f), 0.0f);
-    EXPECT_NEAR(test::reference_w(h.exact, dvec3(x)), 0.5, 1e-12) << str(x);
+    EXPECT_NEAR(reference::reference_w(h.exact, dvec3(x)), 0.5, 1e-12) << str(x);
   }
   std::printf("hemisphere axis: max |w_tree - w_exact| %.2e\n", worst_tree);
 }
@@ -601,10 +593,10 @@ std::vector<glm::dvec2> level_curve(const HemisphereReference& h, double level, 
   for (int i = 0; i <= samples; ++i) {
     const double rho = rho_max * i / samples;
     double a = z_lo, b = z_hi;
-    if (!(test::reference_w(h.exact, {rho, 0, a}) < level && test::reference_w(h.exact, {rho, 0, b}) > level)) continue;
+    if (!(reference::reference_w(h.exact, {rho, 0, a}) < level && reference::reference_w(h.exact, {rho, 0, b}) > level)) continue;
     for (int it = 0; it < 40; ++it) {
       const double m = 0.5 * (a + b);
-      (test::reference_w(h.exact, {rho, 0, m}) < level ? a : b) = m;
+      (reference::reference_w(h.exact, {rho, 0, m}) < level ? a : b) = m;
     }
     curve.push_back({rho, 0.5 * (a + b)});
   }
@@ -648,7 +640,7 @@ TEST(SignedDistance, CurvatureCorrectionWinsOnACurvedLevel) {
   for (size_t i = 0; i < points.size(); ++i) {
     const dvec3 x(points[i]);
     const double d = distance_to_curve(curve, {x.x, x.z});
-    const double reference = test::reference_w(h.exact, x) > 0.3 ? -d : d;
+    const double reference = reference::reference_w(h.exact, x) > 0.3 ? -d : d;
     const double e1 = std::fabs(res[i].sdf.first_order - reference), e2 = std::fabs(res[i].sdf.second_order - reference);
     worst1 = std::max(worst1, e1);
     worst2 = std::max(worst2, e2);
@@ -790,7 +782,7 @@ TEST(SignedDistance, NewtonProjectsOntoTheDisk) {
     const SurfaceProjection& p = res[i].projection;
     ASSERT_TRUE(p.converged) << str(points[i]) << " -> " << str(p.point) << " after " << p.iterations;
     EXPECT_LE(std::fabs(p.residual), request.newton.tolerance) << str(points[i]);
-    const double exact_residual = test::reference_w(h.exact, dvec3(p.point)) - 0.5;
+    const double exact_residual = reference::reference_w(h.exact, dvec3(p.point)) - 0.5;
     EXPECT_LE(std::fabs(exact_residual), 5e-4) << str(points[i]) << " -> " << str(p.point);
     EXPECT_LE(std::fabs(p.point.z), 1e-3f) << str(points[i]) << " -> " << str(p.point);
     const float z0 = points[i].z;
@@ -869,7 +861,7 @@ TEST(SignedDistance, HarnackBoundNeverExceedsTheDistanceToS) {
     std::vector<double> ratios;
     for (size_t i = 0; i < points.size(); ++i) {
       const dvec3 x(points[i]);
-      const double reference = closed ? brute_distance(sphere_mesh, x) : h.distance(x);
+      const double reference = closed ? mesh_distance(sphere_mesh, x) : h.distance(x);
       const float mesh_distance = unsigned_distance(v.triangles, points[i]).distance;
       const float single = harnack_lower_bound(v, points[i], 0.5f, 2.0f, mesh_distance);
       EXPECT_EQ(single, r[i].harnack_bound) << str(points[i]);

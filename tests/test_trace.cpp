@@ -1,5 +1,5 @@
 // trace_surface against independent references: Embree's triangle hits on watertight meshes,
-// and the dense-sampling reference of test_util.h (exact w in double, bisection) on meshes with
+// and the dense-sampling reference of first_crossing.h (exact w in double, bisection) on meshes with
 // holes, in solid-angle mode and at levels other than 1/2; plus fuzzing of the tracer's input.
 #include <algorithm>
 #include <cmath>
@@ -17,6 +17,7 @@
 
 #include "gwnrt/trace/surface_trace.h"
 #include "gwnrt/field/winding_number.h"
+#include "first_crossing.h"
 #include "test_util.h"
 
 #ifdef GWNRT_HAVE_EMBREE
@@ -28,9 +29,9 @@ namespace {
 
 using test::build_model;
 using test::load_test_mesh;
-using test::ReferenceCrossing;
-using test::ReferenceMesh;
-using test::ReferenceMode;
+using reference::ReferenceCrossing;
+using reference::ReferenceMesh;
+using reference::ReferenceMode;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -90,13 +91,13 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
   // w and ∇w against the library's double brute force and against central differences.
   const Mesh fan = test::make_hexagon_fan();
   const GwnModel model = build_model(fan);
-  const ReferenceMesh ref = test::reference_mesh(fan);
+  const ReferenceMesh ref = reference::reference_mesh(fan);
   Random rng(91);
   for (int i = 0; i < 200; ++i) {
     const vec3 x = rng.in_box(Aabb{vec3(-1.5f), vec3(1.5f)});
     const WindingSampleExact e = winding_number_exact(model.triangle_view(), x, true);
-    const double w = test::reference_w(ref, dvec3(x));
-    const dvec3 g = test::reference_gradient(ref, dvec3(x));
+    const double w = reference::reference_w(ref, dvec3(x));
+    const dvec3 g = reference::reference_gradient(ref, dvec3(x));
     EXPECT_NEAR(w, e.w, 1e-12);  // both double sums of the same terms
     EXPECT_LE(glm::length(g - e.gradient), 1e-9 * (1.0 + glm::length(g)));
     const double h = 1e-6;
@@ -104,7 +105,7 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
     for (int k = 0; k < 3; ++k) {
       dvec3 step(0.0);
       step[k] = h;
-      fd[k] = (test::reference_w(ref, dvec3(x) + step) - test::reference_w(ref, dvec3(x) - step)) / (2 * h);
+      fd[k] = (reference::reference_w(ref, dvec3(x) + step) - reference::reference_w(ref, dvec3(x) - step)) / (2 * h);
     }
     // O(h²) truncation and 1e-16/h cancellation, away from the mesh (points within 1e-3 of it
     // are rare and may straddle it: skipped).
@@ -115,33 +116,33 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
   // First crossing of a closed unit icosphere from outside: the sheet at the analytic distance
   // (the facets lie within 1 - cos(half the edge angle) of the sphere: 1% at 3 subdivisions).
   const Mesh sphere = test::make_sphere(3);
-  const ReferenceMesh sref = test::reference_mesh(sphere);
+  const ReferenceMesh sref = reference::reference_mesh(sphere);
   for (int i = 0; i < 20; ++i) {
     const vec3 d = rng.unit();
     const Ray r{-3.0f * d, d * 2.0f};
-    const ReferenceCrossing c = test::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400);
+    const ReferenceCrossing c = reference::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400);
     ASSERT_TRUE(c.hit);
     EXPECT_TRUE(c.sheet);
     EXPECT_NEAR(c.t * 2.0, 2.0, 0.02);
     // From inside, the way out.
     const Ray in{vec3(0.0f), d};
-    const ReferenceCrossing o = test::reference_first_crossing(sref, in, 0.5, grown(sref.box, 1.0f), 400);
+    const ReferenceCrossing o = reference::reference_first_crossing(sref, in, 0.5, grown(sref.box, 1.0f), 400);
     ASSERT_TRUE(o.hit);
     EXPECT_NEAR(o.t, 1.0, 0.02);
     // Solid-angle mode: a closed mesh has no smooth level set.
-    EXPECT_FALSE(test::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400, ReferenceMode::kSolidAngle).hit);
+    EXPECT_FALSE(reference::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400, ReferenceMode::kSolidAngle).hit);
   }
   // A flat square's level 1/2 in solid-angle mode is the square itself (w → ∓1/2 on either
   // side, |w| < 1/2 elsewhere): reached smoothly from both sides.
   Mesh square;
   square.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
   square.triangles = {{0, 1, 2}, {0, 2, 3}};
-  const ReferenceMesh qref = test::reference_mesh(square);
+  const ReferenceMesh qref = reference::reference_mesh(square);
   for (const float z : {-2.0f, 2.0f}) {
     const Ray r{vec3(0.3f, -0.2f, z), vec3(0.1f, 0.05f, -z)};
     // An odd sample count: no sample falls exactly on the square (w is undefined on M).
     const ReferenceCrossing c =
-        test::reference_first_crossing(qref, r, 0.5, grown(qref.box, 1.0f), 399, ReferenceMode::kSolidAngle);
+        reference::reference_first_crossing(qref, r, 0.5, grown(qref.box, 1.0f), 399, ReferenceMode::kSolidAngle);
     ASSERT_TRUE(c.hit);
     EXPECT_NEAR(c.t, 1.0, 1e-9);
     EXPECT_FALSE(c.sheet);
@@ -201,11 +202,11 @@ std::vector<Ray> watertight_rays(const Mesh& mesh, const ReferenceMesh& ref, siz
     Ray r;
     const int kind = int(rays.size() % 4);  // 0, 1: aimed; 2: any direction; 3: inside
     r.origin = rng.in_box(far);
-    const double w = test::reference_w(ref, dvec3(r.origin));
+    const double w = reference::reference_w(ref, dvec3(r.origin));
     if (kind < 3 && w > 0.25) continue;  // origins outside the solid
     if (kind == 3) {
       r.origin = rng.in_box(box);
-      if (test::reference_w(ref, dvec3(r.origin)) < 0.75) continue;
+      if (reference::reference_w(ref, dvec3(r.origin)) < 0.75) continue;
     }
     const vec3 to = kind < 2 ? rng.in_box(box) - r.origin : rng.unit();
     r.direction = glm::normalize(to) * rng.scale();
@@ -224,7 +225,7 @@ void check_against_embree(const Mesh& mesh, size_t ray_count, uint32_t seed) {
   const GwnModel model = build_model(mesh);
   ASSERT_EQ(model.boundary().segment_count(), 0u) << "the mesh must be closed";
   const ModelView view = model.view();
-  const ReferenceMesh ref = test::reference_mesh(mesh);
+  const ReferenceMesh ref = reference::reference_mesh(mesh);
   const EmbreeScene embree(mesh);
   const double diag = box_diagonal(model.bounds());
   std::vector<bool> inside;
@@ -382,7 +383,7 @@ struct Comparison {
 };
 
 struct RayReference {
-  test::ReferenceProfile profile;
+  reference::ReferenceProfile profile;
 };
 
 // Samples about every 1/400 of the box diagonal (a crossing pair thinner than that can hide
@@ -392,10 +393,10 @@ std::vector<RayReference> sample_rays(const ReferenceMesh& ref, const std::vecto
   const double diag = ref.diagonal;
   tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
     double s0, s1;
-    test::clip_ray_to_box(rays[i], box, s0, s1);
+    reference::clip_ray_to_box(rays[i], box, s0, s1);
     if (!(s0 < s1)) return;
     const int samples = std::max(16, int(std::ceil((s1 - s0) / diag * 400.0)));
-    out[i].profile = test::reference_profile_between(ref, rays[i], s0, s1, samples);
+    out[i].profile = reference::reference_profile_between(ref, rays[i], s0, s1, samples);
   });
   return out;
 }
@@ -444,8 +445,8 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
   tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
     const Ray& r = rays[i];
     const RayHit h = trace_surface(view, r, options);
-    const test::ReferenceProfile& p = samples[i].profile;
-    const ReferenceCrossing c = test::reference_crossing(ref, p, level, mode);
+    const reference::ReferenceProfile& p = samples[i].profile;
+    const ReferenceCrossing c = reference::reference_crossing(ref, p, level, mode);
     const double len = glm::length(dvec3(r.direction));
     const double s_trace = h.hit ? double(h.t) * len : kInf;
     auto fail = [&](const std::string& why) {
@@ -467,7 +468,7 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
         size_t best = 0;
         for (size_t k = 1; k < p.w.size(); ++k)
           if (level_gap(p.w[k], level, mode) < level_gap(p.w[best], level, mode)) best = k;
-        const double g = glm::length(test::reference_gradient(ref, p.point(p.s[best])));
+        const double g = glm::length(reference::reference_gradient(ref, p.point(p.s[best])));
         if (level_gap(p.w[best], level, mode) <= 0.02 * diag * g) {
           verdicts[i] = 7;
           return;
@@ -484,7 +485,7 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
     auto check_hit_details = [&]() -> bool {
       const dvec3 x(h.position);
       if (h.kind == HitKind::kSmooth) {
-        const dvec3 g = test::reference_gradient(ref, x);
+        const dvec3 g = reference::reference_gradient(ref, x);
         const double cosine = glm::dot(dvec3(h.normal), -g / glm::length(g)) / glm::length(dvec3(h.normal));
         angles[i] = std::acos(std::clamp(cosine, -1.0, 1.0));
         if (!(angles[i] <= tol.normal_angle)) {
@@ -499,8 +500,8 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
         }
         // w a little way along ±normal: beyond round-off (1e-6 diag), well inside one triangle.
         const dvec3 n(h.normal);
-        const double ahead = test::reference_w(ref, x + 1e-6 * diag * n);
-        const double behind = test::reference_w(ref, x - 1e-6 * diag * n);
+        const double ahead = reference::reference_w(ref, x + 1e-6 * diag * n);
+        const double behind = reference::reference_w(ref, x - 1e-6 * diag * n);
         if (!(ahead < level + 1e-3 && behind > level - 1e-3)) {
           fail("sheet normal does not point from w > level to w < level (w ahead " + std::to_string(ahead) +
                ", behind " + std::to_string(behind) + ")");
@@ -522,21 +523,21 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
       // arbitrarily thin next to ∂M)? Look for a crossing within the tolerance of the tracer's
       // point, with the rate and gradient taken there.
       const dvec3 xg(h.position);
-      const dvec3 gx = test::reference_gradient(ref, xg);
+      const dvec3 gx = reference::reference_gradient(ref, xg);
       const double rate_x = std::fabs(glm::dot(gx, p.direction));
       const double local = h.kind == HitKind::kSheet ? t_round
                                                       : 2.0 * (tol.delta_w + eps * glm::length(gx)) / rate_x + t_round;
       if (local < 0.05 * diag) {
-        const test::ReferenceProfile fine =
-            test::reference_profile_between(ref, r, std::max(p.s.front(), s_trace - local), s_trace + local, 16);
-        if (test::reference_crossing(ref, fine, level, mode).hit) {
+        const reference::ReferenceProfile fine =
+            reference::reference_profile_between(ref, r, std::max(p.s.front(), s_trace - local), s_trace + local, 16);
+        if (reference::reference_crossing(ref, fine, level, mode).hit) {
           if (check_hit_details()) verdicts[i] = 3;
           return;
         }
       }
       const dvec3 x(h.position);
-      const double w = test::reference_w(ref, x);
-      const double g = glm::length(test::reference_gradient(ref, x));
+      const double w = reference::reference_w(ref, x);
+      const double g = glm::length(reference::reference_gradient(ref, x));
       if (h.kind == HitKind::kSmooth && level_gap(w, level, mode) <= 2.0 * (tol.delta_w + eps * g)) {
         verdicts[i] = 4;
         return;
@@ -547,7 +548,7 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
     const double g = c.sheet ? 0.0 : glm::length(c.gradient);
     const double dl = 2.0 * (tol.delta_w + eps * g);
     for (const double sign : {-1.0, 1.0}) {
-      const ReferenceCrossing moved = test::reference_crossing(ref, p, level + sign * dl, mode);
+      const ReferenceCrossing moved = reference::reference_crossing(ref, p, level + sign * dl, mode);
       double rate = std::min(c.rate, moved.rate);
       if (!moved.hit || std::fabs(moved.s - c.s) > 4.0 * dl / rate + t_round) {
         verdicts[i] = 5;
@@ -680,7 +681,7 @@ class TraceOpenMesh : public ::testing::TestWithParam<OpenCase> {};
 TEST_P(TraceOpenMesh, MatchesDenseSamplingReference) {
   const GwnModel model = build_model(open_mesh(GetParam().name));
   ASSERT_GT(model.boundary().segment_count(), 0u);
-  const ReferenceMesh ref = test::reference_mesh(model.mesh());
+  const ReferenceMesh ref = reference::reference_mesh(model.mesh());
   const std::vector<Ray> rays = open_rays(model, GetParam().rays, 201);
   const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
   for (const bool exact : {true, false}) {
@@ -706,19 +707,20 @@ TEST(TraceOpenMesh, MultipoleErrorOnTheLevelSetIsBounded) {
   for (const char* name : {"bunny_holes", "open_cube", "hexagon_fan"}) {
     SCOPED_TRACE(name);
     const GwnModel model = build_model(open_mesh(name));
-    const ReferenceMesh ref = test::reference_mesh(model.mesh());
+    const ReferenceMesh ref = reference::reference_mesh(model.mesh());
     const std::vector<Ray> rays = open_rays(model, std::string(name) == "bunny_holes" ? 90 : 600, 202);
     const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
     const ModelView view = model.view();
     double max_w = 0, max_g = 0;
     size_t points = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
-      const ReferenceCrossing c = test::reference_crossing(ref, samples[i].profile, 0.5, ReferenceMode::kWindingNumber);
+      const ReferenceCrossing c =
+          reference::reference_crossing(ref, samples[i].profile, 0.5, ReferenceMode::kWindingNumber);
       if (!c.hit || c.sheet) continue;
       const dvec3 x = samples[i].profile.point(c.s);
       // What the tracer evaluates (φ for its steps, ∇w for its stopping test and its normal).
       const PhaseSample sample = sample_phase(view, vec3(x), TraceOptions{}.beta, true);
-      const double w = test::reference_w(ref, x);
+      const double w = reference::reference_w(ref, x);
       max_w = std::max(max_w, level_gap(double(sample.phi), w, ReferenceMode::kSolidAngle));  // equal mod 1
       max_g = std::max(max_g, glm::length(dvec3(sample.gradient) - c.gradient) / glm::length(c.gradient));
       ++points;
@@ -843,7 +845,7 @@ TEST(TraceSolidAngle, NonplanarQuadMatchesDenseSamplingReference) {
   m.positions = {{0, 0, 0}, {1, 0, 0.3f}, {1, 1, 0}, {0, 1, 0.3f}};
   m.triangles = {{0, 1, 2}, {0, 2, 3}};
   const GwnModel model = build_model(m);
-  const ReferenceMesh ref = test::reference_mesh(m);
+  const ReferenceMesh ref = reference::reference_mesh(m);
   const std::vector<Ray> rays = open_rays(model, 1500, 303);
   const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
   for (const bool exact : {true, false}) {
@@ -866,7 +868,7 @@ class TraceLevel : public ::testing::TestWithParam<OpenCase> {};
 
 TEST_P(TraceLevel, MatchesDenseSamplingReference) {
   const GwnModel model = build_model(open_mesh(GetParam().name));
-  const ReferenceMesh ref = test::reference_mesh(model.mesh());
+  const ReferenceMesh ref = reference::reference_mesh(model.mesh());
   const std::vector<Ray> rays = open_rays(model, GetParam().rays, 401);
   const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
   for (const float level : {0.3f, 0.7f}) {
@@ -1292,7 +1294,7 @@ TEST(TraceFilter, RejectingEveryHitVisitsEveryCrossingOfAClosedMesh) {
 TEST(TraceFilter, RejectingTheFirstHitReportsTheSecondOnAnOpenMesh) {
   const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));
   const ModelView view = model.view();
-  const ReferenceMesh ref = test::reference_mesh(model.mesh());
+  const ReferenceMesh ref = reference::reference_mesh(model.mesh());
   const Aabb box = reference_box(model);
   const double diag = box_diagonal(model.bounds());
   const std::vector<Ray> rays = open_rays(model, 90, 302);
@@ -1302,11 +1304,11 @@ TEST(TraceFilter, RejectingTheFirstHitReportsTheSecondOnAnOpenMesh) {
   // first (the dense sums in parallel: they are the slow part).
   std::vector<ReferenceCrossing> firsts(rays.size()), seconds(rays.size());
   tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
-    const test::ReferenceProfile profile = test::reference_profile(ref, rays[i], box, 1500);
-    firsts[i] = test::reference_crossing(ref, profile, 0.5);
+    const reference::ReferenceProfile profile = reference::reference_profile(ref, rays[i], box, 1500);
+    firsts[i] = reference::reference_crossing(ref, profile, 0.5);
     if (!firsts[i].hit) return;
     const double past = firsts[i].s + 1e-4 * diag;
-    seconds[i] = test::reference_crossing(ref, test::reference_profile_between(ref, rays[i], past, profile.s.back(), 1500), 0.5);
+    seconds[i] = reference::reference_crossing(ref, reference::reference_profile_between(ref, rays[i], past, profile.s.back(), 1500), 0.5);
   });
   size_t compared = 0, smooth_first = 0, agree = 0;
   for (size_t i = 0; i < rays.size(); ++i) {

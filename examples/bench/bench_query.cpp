@@ -9,19 +9,20 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
 #include "point_mix.h"
+#include "program.h"
 
 namespace {
 
 using namespace gwnrt;
 using clock_type = std::chrono::steady_clock;
+
+constexpr const char* kProgram = "gwnrt-bench-query";
 
 struct Row {
   std::string mode;
@@ -36,10 +37,7 @@ double time_batch(const GwnModel& model, const std::vector<vec3>& points, const 
   const auto t0 = clock_type::now();
   const Status s = evaluate_points(model, points, request, results);
   const double sec = std::chrono::duration<double>(clock_type::now() - t0).count();
-  if (!s.ok()) {
-    std::fprintf(stderr, "gwnrt-bench-query: %s\n", s.message().c_str());
-    std::exit(1);
-  }
+  if (!s.ok()) examples::die(kProgram, s.message());
   return sec;
 }
 
@@ -47,7 +45,7 @@ double time_batch(const GwnModel& model, const std::vector<vec3>& points, const 
 
 int main(int argc, char** argv) {
   CLI::App app{"Query throughput of gwnrt's multipole tree against the brute-force sum"};
-  std::string mesh_path = std::string(GWNRT_EXAMPLES_DATA_DIR) + "/bunny_holes.obj";
+  std::string mesh_path = std::string(GWNRT_DATA_DIR) + "/bunny_holes.obj";
   size_t count = 1000000;
   double brute_seconds = 3.0;
   float beta = 2.0f;
@@ -61,25 +59,18 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "random seed of the point mix");
   CLI11_PARSE(app, argc, argv);
 
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  const int workers = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const examples::ThreadLimit limit(threads);
+  const int workers = int(limit.workers());
 
   Mesh mesh;
   MeshLoadReport report;
   const auto tl = clock_type::now();
-  if (Status s = load_mesh(mesh_path, mesh, &report); !s.ok()) {
-    std::fprintf(stderr, "gwnrt-bench-query: %s\n", s.message().c_str());
-    return 1;
-  }
+  if (Status s = load_mesh(mesh_path, mesh, &report); !s.ok()) return examples::fail(kProgram, s.message());
   const double load_sec = std::chrono::duration<double>(clock_type::now() - tl).count();
   Aabb box;
   for (const vec3& p : mesh.positions) box.extend(p);
   GwnModel model;
-  if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) {
-    std::fprintf(stderr, "gwnrt-bench-query: %s\n", s.message().c_str());
-    return 1;
-  }
+  if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) return examples::fail(kProgram, s.message());
   const size_t tris = model.mesh().triangles.size();
   std::printf("mesh            %s\n", mesh_path.c_str());
   std::printf("triangles       %zu (%zu degenerate), boundary segments %zu\n", tris, report.degenerate_triangles,

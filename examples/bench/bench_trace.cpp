@@ -7,7 +7,7 @@
 // with rays/s for each, the ratios b/a and b/c, gwnrt's step statistics, and how far the three
 // agree (hit/miss and |Δt| relative to the box diagonal).
 //
-// With no meshes given it runs bunny.obj, bunny_holes.obj and teapot.obj from the test data,
+// With no meshes given it runs bunny.obj, bunny_holes.obj and teapot.obj from data/,
 // and the full 871k-triangle dragon when /tmp/dragon_vrip.ply exists (make it with
 // `gunzip -c ../shared/meshes/dragon_vrip.ply.gz > /tmp/dragon_vrip.ply`, or pass its path).
 // The camera is gwnrt-render's (frame_box), so both programs shoot exactly these rays.
@@ -30,7 +30,6 @@
 
 #include <CLI/CLI.hpp>
 #include <tbb/blocked_range.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -44,6 +43,7 @@
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
 #include "load_model.h"
+#include "program.h"
 
 namespace {
 
@@ -53,11 +53,6 @@ using examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-bench-trace";
 
-
-[[noreturn]] void die(const std::string& message) {
-  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
-  std::exit(1);
-}
 
 const char* kind_name(HitKind kind) {
   switch (kind) {
@@ -97,7 +92,7 @@ double trace_gwnrt(const GwnModel& model, const std::vector<Ray>& rays, const Tr
                    std::vector<RayHit>& hits) {
   hits.assign(rays.size(), RayHit{});
   const auto t0 = clock_type::now();
-  if (Status s = trace_rays(model, rays, options, hits); !s.ok()) die(s.message());
+  if (Status s = trace_rays(model, rays, options, hits); !s.ok()) examples::die(kProgram, s.message());
   return seconds_since(t0);
 }
 
@@ -152,7 +147,7 @@ std::string mesh_label(const std::string& path) { return std::filesystem::path(p
 
 // The brute-force tracer on rays[pixels[m]], in parallel, in the order given; stops starting new
 // rays once `budget` seconds are spent. hits holds the first m results, m the returned count.
-Rate brute_trace(const examples::BruteForceTracer& brute, const std::vector<Ray>& rays,
+Rate brute_trace(const reference::BruteForceTracer& brute, const std::vector<Ray>& rays,
                  const std::vector<size_t>& pixels, const TraceOptions& options, double budget, int workers,
                  std::vector<RayHit>& hits) {
   hits.assign(pixels.size(), RayHit{});
@@ -236,7 +231,7 @@ int main(int argc, char** argv) {
   size_t check = 64;
   TraceOptions options;
   app.add_option("meshes", meshes,
-                 "OBJ or PLY meshes (default: bunny.obj, bunny_holes.obj, teapot.obj from the test data, and "
+                 "OBJ or PLY meshes (default: bunny.obj, bunny_holes.obj, teapot.obj from data/, and "
                  "/tmp/dragon_vrip.ply when it exists)");
   app.add_option("--width", width, "image width in pixels (one ray per pixel)")->check(CLI::PositiveNumber);
   app.add_option("--height", height, "image height in pixels")->check(CLI::PositiveNumber);
@@ -256,17 +251,16 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--show", show, "disagreeing rays printed per comparison")->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
-  if (Status s = validate_trace_options(options); !s.ok()) die(s.message());
+  if (Status s = validate_trace_options(options); !s.ok()) examples::die(kProgram, s.message());
 
   if (meshes.empty()) {
     for (const char* name : {"bunny.obj", "bunny_holes.obj", "teapot.obj"})
-      meshes.push_back(std::string(GWNRT_TEST_DATA_DIR) + "/" + name);
+      meshes.push_back(std::string(GWNRT_DATA_DIR) + "/" + name);
     if (std::filesystem::exists("/tmp/dragon_vrip.ply")) meshes.push_back("/tmp/dragon_vrip.ply");
   }
 
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  const int workers = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const examples::ThreadLimit limit(threads);
+  const int workers = int(limit.workers());
   std::printf("%s: %dx%d rays per mesh, %d threads, level %g, eps %g (of the box diagonal), beta %g\n", kProgram,
               width, height, workers, options.level, options.epsilon, options.beta);
 #if !defined(GWNRT_HAVE_EMBREE)
@@ -278,7 +272,7 @@ int main(int argc, char** argv) {
     // --- load and build
     GwnModel model;
     examples::ModelLoad loaded;
-    if (Status s = examples::load_model(path, model, loaded); !s.ok()) die(s.message());
+    if (Status s = examples::load_model(path, model, loaded); !s.ok()) examples::die(kProgram, s.message());
     const MeshLoadReport& report = loaded.report;
     const double load_sec = loaded.load_seconds, build_sec = loaded.build_seconds;
     const ModelView view = model_view(model);
@@ -304,7 +298,7 @@ int main(int argc, char** argv) {
 #if defined(GWNRT_HAVE_EMBREE)
     {
       const examples::TriangleScene embree(model.mesh(), threads);
-      if (Status st = embree.status(); !st.ok()) die(st.message());
+      if (Status st = embree.status(); !st.ok()) examples::die(kProgram, st.message());
       std::printf("; Embree build %.3f s\n", embree.build_seconds());
       sum.a = best_of_3(rays.size(), [&] { return trace_embree(embree, rays, ehits); });
     }
@@ -328,7 +322,7 @@ int main(int argc, char** argv) {
       while (std::gcd(stride, n_sub) != 1) ++stride;
       for (size_t m = 0; m < n_sub; ++m) subset.push_back(((m * stride) % n_sub) * k + k / 2);
     }
-    const examples::BruteForceTracer brute(view);
+    const reference::BruteForceTracer brute(view);
     std::vector<RayHit> bhits;
     sum.c = brute_trace(brute, rays, subset, options, brute_seconds, workers, bhits);
     const size_t brute_done = sum.c.rays;

@@ -8,426 +8,59 @@
 // sdf, sdf1, sdf2 and Newton projection, how often the Harnack lower bound exceeds the reference
 // (it must never), and queries/s of each query kind through the TBB batch driver.
 //
-// The reference, min over the two kinds of piece:
-//  - sheet pieces: the exact distance to the sheet triangles, model.sheet_tree(). Those are the
-//    triangles sdf itself measures, so where a sheet is nearest the study checks the rest of
-//    the pipeline (winner choice, sign, clamping), not the classification. The classification is
-//    checked on its own: the exact w (double sum over M) just off both sides of triangle
-//    centroids must straddle w* exactly for the sheet triangles; the BVH distance is checked
-//    against a brute-force loop over the sheet triangles.
-//  - smooth pieces: a cloud of points on S. Random lines are traced with trace_surface and every
-//    smooth crossing is kept (the accept filter turns all hits down, so the trace goes on to the
-//    end of the line); each crossing is moved onto the exact level (φ = w_C mod 1 by the double
-//    sum over the cone C, DESIGN §3) and kept only when the exact w of the whole mesh is w* there,
-//    i.e. it is a point of S and not of w* ± 1. For a query point the nearest cloud point seeds a
-//    refinement (project onto its tangent plane, back onto the exact level along the normal,
-//    repeat: the fixed point is a foot of the perpendicular), whose points are confirmed the same
-//    way.
-// Every candidate is a point of S up to the level tolerance, so the reference is an upper bound
-// of the true distance: a Harnack bound above it (beyond that tolerance) is a real violation.
-// The sign is that of w* − w with w the exact double sum over M.
+// The reference (tests/reference/sdf_reference.h) is min over the two kinds of piece: the exact
+// distance to the sheet triangles, model.sheet_tree() (the triangles sdf itself measures, so
+// where a sheet is nearest the study checks the rest of the pipeline: winner choice, sign,
+// clamping), and the distance to points on the smooth pieces confirmed by exact sums. The sheet
+// classification is checked on its own: the exact w (double sum over M) just off both sides of
+// triangle centroids must straddle w* exactly for the sheet triangles; the BVH distance is
+// checked against a brute-force loop over the sheet triangles. A Harnack bound above the
+// reference (beyond its level tolerance) is a real violation: the reference is an upper bound.
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <memory>
-#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
+#include "exact_distance.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "kd_tree.h"
 #include "load_model.h"
+#include "parallel_over.h"
 #include "point_mix.h"
+#include "program.h"
+#include "sdf_reference.h"
+#include "seeded_random.h"
 
 namespace {
 
 using namespace gwnrt;
 using clock_type = std::chrono::steady_clock;
 using examples::seconds_since;
+using reference::CloudPoint;
+using reference::CloudStats;
+using reference::ExactLevel;
+using reference::item_rng;
+using reference::KdTree;
+using reference::kRefineSteps;
+using reference::LevelGap;
+using reference::parallel_over;
+using reference::random_direction;
+using reference::Reference;
+using reference::uniform;
 
 constexpr const char* kProgram = "gwnrt-sdf-study";
 constexpr double kBands[3] = {0.01, 0.05, 0.20};  // |d| / D, nested
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-[[noreturn]] void die(const std::string& message) {
-  std::fprintf(stderr, "%s: %s\n", kProgram, message.c_str());
-  std::exit(1);
-}
-
-template <class Fn>
-void parallel_over(size_t n, Fn fn, size_t grain = 16) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) fn(i);
-  });
-}
-
-// Per-item generators seeded from (seed, stream, index): the same points and lines whatever the
-// thread count.
-std::mt19937_64 item_rng(uint64_t seed, uint64_t stream, uint64_t index) {
-  std::seed_seq seq{uint32_t(seed), uint32_t(seed >> 32), uint32_t(stream), uint32_t(index), uint32_t(index >> 32)};
-  return std::mt19937_64(seq);
-}
-
-double uniform(std::mt19937_64& rng) { return std::uniform_real_distribution<double>(0.0, 1.0)(rng); }
-
-dvec3 random_direction(std::mt19937_64& rng) {
-  const double z = 2.0 * uniform(rng) - 1.0, a = 2.0 * kPi * uniform(rng), r = std::sqrt(std::max(0.0, 1.0 - z * z));
-  return {r * std::cos(a), r * std::sin(a), z};
-}
-
-dvec3 uniform_in_box(const Aabb& box, std::mt19937_64& rng) {
-  const dvec3 lo(box.lo), hi(box.hi);
-  return lo + (hi - lo) * dvec3(uniform(rng), uniform(rng), uniform(rng));
-}
-
-// ---------------------------------------------------------------------------------------------
-// A static kd-tree over points (implicit: the median of each range is its node), k nearest.
-
-class KdTree {
- public:
-  static constexpr size_t kMaxK = 16;
-
-  explicit KdTree(const std::vector<dvec3>& points) : points_(points), index_(points.size()), axis_(points.size()) {
-    std::iota(index_.begin(), index_.end(), 0u);
-    build(0, index_.size());
-  }
-
-  // The k nearest (k <= kMaxK, fewer when there are fewer points), nearest first.
-  size_t nearest(const dvec3& x, size_t k, uint32_t* ids, double* d2) const {
-    Heap heap{ids, d2, std::min(k, kMaxK), 0};
-    search(0, index_.size(), x, heap);
-    return heap.size;
-  }
-
- private:
-  struct Heap {  // a sorted array: k is small
-    uint32_t* ids;
-    double* d2;
-    size_t k, size;
-    double bound() const { return size < k ? kInf : d2[size - 1]; }
-    void offer(uint32_t id, double d) {
-      if (d >= bound()) return;
-      size_t i = size < k ? size++ : size - 1;
-      for (; i > 0 && d2[i - 1] > d; --i) {
-        d2[i] = d2[i - 1];
-        ids[i] = ids[i - 1];
-      }
-      d2[i] = d;
-      ids[i] = id;
-    }
-  };
-
-  void build(size_t lo, size_t hi) {
-    if (hi - lo <= 1) return;
-    dvec3 a(kInf), b(-kInf);
-    for (size_t i = lo; i < hi; ++i) {
-      a = glm::min(a, points_[index_[i]]);
-      b = glm::max(b, points_[index_[i]]);
-    }
-    const dvec3 e = b - a;
-    const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
-    const size_t mid = (lo + hi) / 2;
-    std::nth_element(index_.begin() + lo, index_.begin() + mid, index_.begin() + hi,
-                     [&](uint32_t i, uint32_t j) { return points_[i][axis] < points_[j][axis]; });
-    axis_[mid] = uint8_t(axis);
-    build(lo, mid);
-    build(mid + 1, hi);
-  }
-
-  void search(size_t lo, size_t hi, const dvec3& x, Heap& heap) const {
-    if (lo >= hi) return;
-    const size_t mid = (lo + hi) / 2;
-    const dvec3& p = points_[index_[mid]];
-    const dvec3 d = p - x;
-    heap.offer(index_[mid], glm::dot(d, d));
-    if (hi - lo == 1) return;
-    const double diff = x[axis_[mid]] - p[axis_[mid]];
-    const bool left_first = diff < 0;
-    search(left_first ? lo : mid + 1, left_first ? mid : hi, x, heap);
-    if (diff * diff < heap.bound()) search(left_first ? mid + 1 : lo, left_first ? hi : mid, x, heap);
-  }
-
-  const std::vector<dvec3>& points_;
-  std::vector<uint32_t> index_;
-  std::vector<uint8_t> axis_;
-};
-
-// ---------------------------------------------------------------------------------------------
-// Exact levels: φ by the double sum over the cone, w by the double sum over M.
-
-struct Exact {
-  TriangleTreeView mesh, cone;
-  TriangleTreeView triangles;  // M through its BVH, for distances
-  double level;
-  double diagonal;
-};
-
-// wrap(w_C − w*) in (−1/2, 1/2]: φ − w* on the nearest lift (w − w_C is a whole number off M ∪ C).
-struct LevelGap {
-  double gap;
-  dvec3 gradient;  // ∇w = ∇w_C
-};
-
-LevelGap level_gap(const Exact& e, const dvec3& x) {
-  const WindingSampleExact s = winding_number_exact(e.cone, vec3(x), true, false);
-  double g = s.w - e.level;
-  g -= std::round(g);
-  return {g, s.gradient};
-}
-
-// Accepted as on the level: |φ − w*| below this (float positions cannot do much better where
-// |∇w| is large), and then the whole-mesh w must be w* to within kBandTolerance (not w* ± 1).
-constexpr double kGapTolerance = 1e-5;
-constexpr double kBandTolerance = 1e-3;
-
-// From q, the point q + t·n on the exact level, |t| <= limit (1D Newton along the unit n).
-// `slack` gets |gap| / |∇w| there: how far the true level may be from the returned point.
-bool onto_level(const Exact& e, const dvec3& q, const dvec3& n, double limit, dvec3& out, dvec3& gradient,
-                double& slack) {
-  double t = 0;
-  for (int it = 0; it < 30; ++it) {
-    const dvec3 p = q + t * n;
-    const LevelGap s = level_gap(e, p);
-    const double slope = glm::dot(s.gradient, n);
-    const double gn = glm::length(s.gradient);
-    const bool tight = std::fabs(s.gap) < 1e-8;
-    if (tight || (it > 0 && std::fabs(s.gap) < kGapTolerance && std::fabs(s.gap / slope) < 1e-7 * e.diagonal)) {
-      out = p;
-      gradient = s.gradient;
-      slack = gn > 0 ? std::fabs(s.gap) / gn : kInf;
-      return gn > 0;
-    }
-    if (!(std::fabs(slope) > 0)) return false;
-    t -= s.gap / slope;
-    if (!(std::fabs(t) <= limit)) return false;
-  }
-  return false;
-}
-
-bool on_surface_band(const Exact& e, const dvec3& y) {
-  return std::fabs(winding_number_exact(e.mesh, vec3(y)).w - e.level) < kBandTolerance;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The smooth cloud.
-
-struct CloudPoint {
-  dvec3 p;
-  dvec3 n;  // unit ∇w
-};
-
-struct CloudStats {
-  size_t lines = 0, crossings = 0, capped = 0, moved_off = 0, wrong_band = 0;
-  double seconds = 0;
-  double max_slack = 0;
-};
-
-// Lines for the cloud, a third each: through uniform points of the march boxes (where the tracer
-// says smooth pieces can be), through uniform points of each boundary loop's box (the caps span
-// the loops), and through points near ∂M (the rims, where the caps curve most). Each line runs
-// across the whole box that holds S.
-std::vector<Ray> cloud_lines(const GwnModel& model, const ModelView& view, const TraceOptions& options, size_t first,
-                             size_t count, uint64_t seed) {
-  const BoundaryCurve& curve = model.boundary();
-  uint32_t loop_count = 0;
-  const std::vector<uint32_t> loop_of = boundary_loops(curve, loop_count);
-  std::vector<Aabb> loop_box(loop_count);
-  std::vector<double> cumulative(curve.segment_count());
-  double total = 0;
-  for (size_t s = 0; s < curve.segment_count(); ++s) {
-    loop_box[loop_of[s]].extend(curve.endpoints[2 * s]);
-    loop_box[loop_of[s]].extend(curve.endpoints[2 * s + 1]);
-    total += glm::length(curve.endpoints[2 * s + 1] - curve.endpoints[2 * s]);
-    cumulative[s] = total;
-  }
-  std::vector<Aabb> march;
-  for (uint32_t r = 0; r < march_box_count(view, options.level); ++r)
-    march.push_back(march_box(view, options.level, r));
-  const Aabb all = surface_bounds(view, options);
-  const dvec3 centre(all.centre());
-  const double span = glm::length(dvec3(all.hi) - dvec3(all.lo));
-
-  std::vector<Ray> rays(count);
-  for (size_t j = 0; j < count; ++j) {
-    const size_t i = first + j;
-    std::mt19937_64 rng = item_rng(seed, 1, i);
-    dvec3 p;
-    const int kind = int(i % 3);
-    if (kind == 0 && !march.empty()) {
-      p = uniform_in_box(march[size_t(uniform(rng) * double(march.size())) % march.size()], rng);
-    } else if (kind != 2) {
-      const Aabb& b = loop_box[size_t(uniform(rng) * loop_count) % loop_count];
-      p = uniform_in_box(b, rng);
-    } else {
-      const double at = uniform(rng) * total;
-      const size_t s = std::min(size_t(std::lower_bound(cumulative.begin(), cumulative.end(), at) - cumulative.begin()),
-                                cumulative.size() - 1);
-      const dvec3 a(curve.endpoints[2 * s]), b(curve.endpoints[2 * s + 1]);
-      const Aabb& lb = loop_box[loop_of[s]];
-      const double size = glm::length(dvec3(lb.hi) - dvec3(lb.lo));
-      p = a + uniform(rng) * (b - a) + (0.25 * size * uniform(rng)) * random_direction(rng);
-    }
-    const dvec3 d = random_direction(rng);
-    const double reach = glm::length(p - centre) + span;
-    rays[j].origin = vec3(p - reach * d);
-    rays[j].direction = vec3(d);
-    rays[j].tnear = 0.0f;
-    rays[j].tfar = float(2.0 * reach);
-  }
-  return rays;
-}
-
-// Traces lines until the cloud has `target` points (or `max_lines` lines were shot); every
-// smooth crossing is moved onto the exact level and kept when the whole-mesh w confirms it.
-std::vector<CloudPoint> build_cloud(const GwnModel& model, const Exact& exact, float level, size_t target,
-                                    size_t max_lines, uint64_t seed, CloudStats& stats) {
-  const auto t0 = clock_type::now();
-  const ModelView view = model_view(model);
-  TraceOptions options;
-  options.level = level;
-  std::vector<CloudPoint> cloud;
-  constexpr size_t kBatch = 2048;
-  while (cloud.size() < target && stats.lines < max_lines) {
-    const std::vector<Ray> rays = cloud_lines(model, view, options, stats.lines, kBatch, seed);
-    std::vector<std::vector<CloudPoint>> found(rays.size());
-    std::vector<uint8_t> capped(rays.size(), 0);
-    std::vector<size_t> crossings(rays.size(), 0), moved(rays.size(), 0), band(rays.size(), 0);
-    std::vector<double> slack(rays.size(), 0);
-    parallel_over(rays.size(), [&](size_t i) {
-      std::vector<CloudPoint> raw;
-      const auto record = [&raw](const RayHit& h) {
-        if (h.kind == HitKind::kSmooth) raw.push_back({dvec3(h.position), -dvec3(h.normal)});
-        return false;  // turn every hit down: the trace goes on and offers the next crossing
-      };
-      const RayHit h = trace_surface(view, rays[i], options, record);
-      capped[i] = h.capped;
-      crossings[i] = raw.size();
-      for (const CloudPoint& c : raw) {
-        // The tracer's point is on the tree's level (β = 2 on the cone, ε = 1e-5 D): move it
-        // along its normal onto the exact one, not farther than a fraction of its distance to M
-        // (so that no sheet lies between).
-        const double to_mesh = unsigned_distance(exact.triangles, vec3(c.p)).distance;
-        dvec3 y, g;
-        double s;
-        if (!onto_level(exact, c.p, c.n, 0.5 * to_mesh, y, g, s)) {
-          ++moved[i];
-          continue;
-        }
-        if (!on_surface_band(exact, y)) {
-          ++band[i];
-          continue;
-        }
-        slack[i] = std::max(slack[i], s);
-        found[i].push_back({y, glm::normalize(g)});
-      }
-    });
-    for (size_t i = 0; i < rays.size(); ++i) {
-      cloud.insert(cloud.end(), found[i].begin(), found[i].end());
-      stats.capped += capped[i];
-      stats.crossings += crossings[i];
-      stats.moved_off += moved[i];
-      stats.wrong_band += band[i];
-      stats.max_slack = std::max(stats.max_slack, slack[i]);
-    }
-    stats.lines += rays.size();
-  }
-  stats.seconds = seconds_since(t0);
-  return cloud;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The reference at one point.
-
-struct Reference {
-  double sheet = kInf;       // unsigned distance to the sheet triangles
-  double smooth = kInf;      // unsigned, to the confirmed smooth points (refined)
-  double smooth_raw = kInf;  // to the nearest cloud point alone
-  double tangent_gap = 0;    // |x − y| − |(x − y)·n| at the final refined point: ~0 at a foot
-  double slack = 0;          // how far the level may be from the winning smooth point
-  double w = 0;              // exact w at x
-  double sign = 1;           // sign(w* − w)
-  double distance() const { return sign * std::min(sheet, smooth); }
-  bool smooth_nearest() const { return smooth < sheet; }
-};
-
-constexpr int kRefineSteps = 32;
-
-// Nearest cloud point, then: foot of x on the tangent plane at y, back onto the level along the
-// normal, repeat. Each step stays within half the distance from y to M (no sheet in between, the
-// level a graph over the plane there); the points are confirmed by the whole-mesh w, newest
-// first, and the nearest confirmed one wins.
-// `skip_margin`: no refinement when the sheets are nearer than the raw distance minus this (the
-// cloud's gaps are far smaller, so the smooth pieces cannot win there).
-void smooth_reference(const Exact& e, const std::vector<CloudPoint>& cloud, const KdTree& tree, const dvec3& x,
-                      double skip_margin, Reference& ref) {
-  uint32_t id;
-  double d2;
-  if (tree.nearest(x, 1, &id, &d2) == 0) return;
-  ref.smooth_raw = std::sqrt(d2);
-  ref.smooth = std::min(ref.smooth, ref.smooth_raw);
-  if (ref.sheet < ref.smooth_raw - skip_margin) return;
-  dvec3 y = cloud[id].p, n = cloud[id].n;
-  struct Candidate {
-    dvec3 y, n;
-    double distance, slack;
-  };
-  std::array<Candidate, kRefineSteps> candidates;
-  int count = 0;
-  double current = glm::length(x - y);
-  for (int k = 0; k < kRefineSteps; ++k) {
-    const dvec3 v = x - y;
-    dvec3 tangent = v - glm::dot(v, n) * n;
-    const double step = glm::length(tangent);
-    // For a flat piece the distance is off by about step² / (2|x − y|): stop far below the
-    // level slack's scale.
-    if (step * step < 2e-9 * e.diagonal * current) break;
-    // Within half the distance to M no sheet lies between y and the next point, so the level
-    // reached is y's own (w = w*); a longer step (near the rims, where the caps meet M) may reach
-    // w* ± 1 beyond a sheet, so its point is confirmed by the exact w of M before it is taken.
-    const double safe = 0.5 * unsigned_distance(e.triangles, vec3(y)).distance;
-    // The full step reaches the foot when the piece is flat; where it curves toward x (radius
-    // of curvature near |x − y|) the full step overshoots and cycles: halve until it gets nearer.
-    bool moved = false;
-    for (int halving = 0; halving < 10 && !moved; ++halving, tangent *= 0.5) {
-      const double length = glm::length(tangent);
-      dvec3 z, g;
-      double slack;
-      if (!onto_level(e, y + tangent, n, std::max(safe, length), z, g, slack)) continue;
-      const double d = glm::length(x - z);
-      if (!(d < current)) continue;
-      const bool confirmed = glm::length(z - y) > safe;
-      if (confirmed && !on_surface_band(e, z)) continue;
-      y = z;
-      n = glm::normalize(g);
-      current = d;
-      candidates[count++] = {y, n, d, slack};
-      moved = true;
-    }
-    if (!moved) break;
-  }
-  std::sort(candidates.begin(), candidates.begin() + count,
-            [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
-  for (int k = 0; k < count; ++k) {
-    if (candidates[k].distance >= ref.smooth) break;
-    if (!on_surface_band(e, candidates[k].y)) continue;
-    ref.smooth = candidates[k].distance;
-    ref.slack = candidates[k].slack;
-    const dvec3 v = x - candidates[k].y;
-    ref.tangent_gap = glm::length(v) - std::fabs(glm::dot(v, candidates[k].n));
-    break;
-  }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Statistics and printing.
@@ -459,7 +92,7 @@ double rate_of(size_t points, double seconds) { return seconds > 0 ? double(poin
 
 int main(int argc, char** argv) {
   CLI::App app{"Accuracy of gwnrt's signed-distance estimates of S = ∂{w > w*} against an independent reference"};
-  std::string mesh_path = std::string(GWNRT_TEST_DATA_DIR) + "/bunny_holes.obj";
+  std::string mesh_path = std::string(GWNRT_DATA_DIR) + "/bunny_holes.obj";
   size_t count = 20000;
   size_t cloud_target = 30000, max_lines = 400000;
   size_t check_triangles = 4000, brute_points = 1000;
@@ -467,7 +100,7 @@ int main(int argc, char** argv) {
   float level = 0.5f, beta = 2.0f;
   int threads = 0;
   uint64_t seed = 1;
-  app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: tests/data/bunny_holes.obj)");
+  app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: data/bunny_holes.obj)");
   app.add_option("--points", count, "sample points around S")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "random seed (points and lines)");
   app.add_option("--level", level, "the level w* of S = ∂{w > w*}");
@@ -484,19 +117,18 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
 
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  const int workers = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const examples::ThreadLimit limit(threads);
+  const int workers = int(limit.workers());
   const auto t_start = clock_type::now();
 
   GwnModel model;
   examples::ModelLoad loaded;
-  if (Status s = examples::load_model(mesh_path, model, loaded); !s.ok()) die(s.message());
+  if (Status s = examples::load_model(mesh_path, model, loaded); !s.ok()) examples::die(kProgram, s.message());
   if (level != model.sheet_level())
-    if (Status s = model.set_sheet_level(level); !s.ok()) die(s.message());
+    if (Status s = model.set_sheet_level(level); !s.ok()) examples::die(kProgram, s.message());
   const ModelView view = model_view(model);
   const double diag = glm::length(dvec3(model.bounds().hi) - dvec3(model.bounds().lo));
-  const Exact exact{model.triangle_view(), model.cone_tree().view(), model.triangle_view(), double(level), diag};
+  const ExactLevel exact{model.triangle_view(), model.cone_tree().view(), model.triangle_view(), double(level), diag};
   const size_t tris = model.mesh().triangles.size();
   const size_t sheets = model.sheet_tree().triangle_ids.size();
 
@@ -574,7 +206,7 @@ int main(int argc, char** argv) {
   std::vector<CloudPoint> cloud;
   CloudStats cloud_stats;
   if (view.cone.triangle_count > 0)
-    cloud = build_cloud(model, exact, level, cloud_target, max_lines, seed, cloud_stats);
+    cloud = reference::build_cloud(model, exact, level, cloud_target, max_lines, seed, cloud_stats);
   std::vector<dvec3> cloud_points(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) cloud_points[i] = cloud[i].p;
   const KdTree cloud_tree(cloud_points);
@@ -642,7 +274,7 @@ int main(int argc, char** argv) {
     double cacc = 0;
     for (size_t i = 0; i < cloud.size(); ++i) cloud_cdf[i] = cacc += area_weight[i];
     const double share = cloud.empty() ? 0.0 : (sheet_cdf.empty() ? 1.0 : smooth_share);
-    if (sheet_cdf.empty() && cloud.empty()) die("S is empty for this level: nothing to study");
+    if (sheet_cdf.empty() && cloud.empty()) examples::die(kProgram, "S is empty for this level: nothing to study");
     for (size_t i = 0; i < count; ++i) {
       std::mt19937_64 rng = item_rng(seed, 3, i);
       const auto pick = [&](const std::vector<double>& cdf) {
@@ -677,7 +309,7 @@ int main(int argc, char** argv) {
       const dvec3 x = points[i];
       r.sheet = unsigned_distance(sheet_view, vec3(x)).distance;
       if (!cloud.empty()) {
-        smooth_reference(exact, cloud, cloud_tree, x, skip_margin, r);
+        reference::smooth_reference(exact, cloud, cloud_tree, x, skip_margin, r);
         if (from_smooth[i]) r.smooth = std::min(r.smooth, glm::length(x - bases[i]));
       }
       r.w = winding_number_exact(exact.mesh, vec3(x)).w;
@@ -692,12 +324,7 @@ int main(int argc, char** argv) {
     const TriangleTree& st = model.sheet_tree();
     std::vector<double> err(brute_n, 0);
     parallel_over(brute_n, [&](size_t i) {
-      double best = kInf;
-      for (size_t t = 0; t < st.triangle_ids.size(); ++t) {
-        const ClosestPoint<double> c = closest_point_on_triangle(
-            dvec3(st.vertices[3 * t]), dvec3(st.vertices[3 * t + 1]), dvec3(st.vertices[3 * t + 2]), points[i]);
-        best = std::min(best, glm::length(c.point - points[i]));
-      }
+      const double best = reference::soup_distance(st.vertices, points[i]);
       err[i] = std::isinf(best) && std::isinf(refs[i].sheet) ? 0 : std::fabs(best - refs[i].sheet);
     });
     for (double e : err) brute_max = std::max(brute_max, e);
@@ -730,7 +357,7 @@ int main(int argc, char** argv) {
       double spent = 0;
       for (int pass = 0; pass < 5 && spent < 1.0; ++pass) {
         const auto t0 = clock_type::now();
-        if (Status s = evaluate_points(model, at, request, results[k]); !s.ok()) die(s.message());
+        if (Status s = evaluate_points(model, at, request, results[k]); !s.ok()) examples::die(kProgram, s.message());
         const double sec = seconds_since(t0);
         seconds[k] = std::min(seconds[k], sec);
         spent += sec;
@@ -756,13 +383,13 @@ int main(int argc, char** argv) {
   parallel_over(count, [&](size_t i) {
     if (!refs[i].smooth_nearest() || !newton[i].projection.converged) return;
     const dvec3 p(newton[i].projection.point);
-    const LevelGap s = level_gap(exact, p);
+    const LevelGap s = reference::level_gap(exact, p);
     const double gn = glm::length(s.gradient);
     if (!(gn > 0)) return;
     dvec3 y, g;
     double slack;
     const double room = 0.5 * unsigned_distance(exact.triangles, vec3(p)).distance;
-    if (onto_level(exact, p, s.gradient / gn, room, y, g, slack) && on_surface_band(exact, y))
+    if (reference::onto_level(exact, p, s.gradient / gn, room, y, g, slack) && reference::on_surface_band(exact, y))
       newton_exact[i] = glm::length(points[i] - y);
   });
 

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "../test_util.h"
+#include "first_crossing.h"
 #include "camera.h"
 #include "embree_ray.h"
 #include "embree_triangles.h"
@@ -569,9 +570,9 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
 // Whether the exact w (double, test_util.h) crosses 1/2 at the hit the right way: the ray enters
 // {w > 1/2} where Ng (outward) faces it, and leaves it elsewhere. Sampled at `delta` before and
 // after the hit along the ray; returns the two values.
-std::pair<double, double> w_around(const test::ReferenceMesh& ref, const Ray& r, float t, double delta) {
+std::pair<double, double> w_around(const reference::ReferenceMesh& ref, const Ray& r, float t, double delta) {
   const dvec3 p = hit_point(r, t), step = delta * glm::normalize(dvec3(r.direction));
-  return {test::reference_w(ref, p - step), test::reference_w(ref, p + step)};
+  return {reference::reference_w(ref, p - step), reference::reference_w(ref, p + step)};
 }
 bool crosses_half(const std::pair<double, double>& w, bool entering) {
   return entering ? w.first < 0.5 && w.second > 0.5 : w.first > 0.5 && w.second < 0.5;
@@ -602,7 +603,7 @@ TEST(EmbreePlugin, OpenMeshMatchesTraceSurface) {
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
 
   const std::vector<Ray> rays = bunny_holes_rays(model, 40);
-  const test::ReferenceMesh exact = test::reference_mesh(mesh);
+  const reference::ReferenceMesh exact = reference::reference_mesh(mesh);
   const double diag = diagonal(model.bounds());
   size_t sheet = 0, smooth = 0, limited = 0, off_surface = 0;
   Worst dt;
@@ -1383,7 +1384,7 @@ Mesh stacked_soup(int k) {
 // Whether the ray meets `box` at all (its whole line from tnear).
 bool ray_meets_box(const Ray& r, const Aabb& box) {
   double s0, s1;
-  test::clip_ray_to_box(r, box, s0, s1);
+  reference::clip_ray_to_box(r, box, s0, s1);
   return s0 <= s1;
 }
 
@@ -1449,7 +1450,7 @@ TEST(EmbreePlugin, BoundsHoldSurfaceFarOutsideTheBox) {
 // exactly trace_surface's hits (above), so a failure here is the core tracer's.
 TEST(EmbreePlugin, SoupHitsLieOnTheSurface) {
   const Mesh soup = stacked_soup(12);
-  const test::ReferenceMesh exact = test::reference_mesh(soup);
+  const reference::ReferenceMesh exact = reference::reference_mesh(soup);
   const double diag = diagonal(test::mesh_bounds(soup));
   Device device;
   Scene scene(device);

@@ -49,7 +49,7 @@
 #include "gwnrt/trace/surface_trace.h"
 #include "gwnrt/field/winding_number.h"
 
-namespace gwnrt::examples {
+namespace gwnrt::reference {
 
 class BruteForceTracer {
  public:
@@ -260,4 +260,4 @@ class BruteForceTracer {
   std::vector<dvec3> edges_;  // 2 per edge
 };
 
-}  // namespace gwnrt::examples
+}  // namespace gwnrt::reference

@@ -32,7 +32,7 @@ class RenderCli : public ::testing::Test {
   std::string binary_;
 };
 
-const std::string kScene = test::data_path("../../examples/data/bunny_scene.json");
+const std::string kScene = test::data_path("bunny_scene.json");
 
 TEST_F(RenderCli, BundledSceneRenders) {
   expect_image(test::quote(kScene) + " --spp 1 --width 40 --height 24", ".png", 40, 24);
@@ -40,7 +40,7 @@ TEST_F(RenderCli, BundledSceneRenders) {
 
 // Glass (a GWN object), rough metal, an emissive quad, a sun: every material and light kind.
 TEST_F(RenderCli, MaterialsSceneRenders) {
-  expect_image(test::quote(test::data_path("../../examples/data/materials_scene.json")) + " --spp 2 --width 32 --height 18",
+  expect_image(test::quote(test::data_path("materials_scene.json")) + " --spp 2 --width 32 --height 18",
                ".exr", 32, 18);
 }
 
