@@ -1,4 +1,4 @@
-// Signed distance to S = ∂{w > w*} (DESIGN §1): the sheet classification, the distance to the
+// Signed distance to S = ∂{w > w*} (docs/design.md §4): the sheet classification, the distance to the
 // sheets, the pseudo-SDF and its curvature correction, Newton projection and the Harnack lower
 // bound, each against a reference that does not go through the code under test: analytic
 // distances (sphere, the flat disk that caps a hemisphere), the winding number on the axis of a

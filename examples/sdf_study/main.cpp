@@ -1,5 +1,5 @@
-// gwnrt-sdf-study: how accurate are gwnrt's distance estimates of S = ∂{w > w*} (DESIGN §1,
-// "Signed distance to S"), and what do they cost? Exits with status 3 when the Harnack lower
+// gwnrt-sdf-study: how accurate are gwnrt's distance estimates of S = ∂{w > w*} (docs/design.md §4),
+// and what do they cost? Exits with status 3 when the Harnack lower
 // bound exceeds the reference anywhere (beyond the reference's own tolerance).
 //
 // Points are sampled around S, each gets a reference signed distance computed without the
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
       tris, loaded.report.degenerate_triangles, sheets, level, model.boundary().segment_count(), diag, workers, beta);
 
   // --- 1. The sheet classification, independently: the exact w just off both sides of the
-  // centroid straddles w* exactly when the triangle is a piece of S (DESIGN §1). Their mean is
+  // centroid straddles w* exactly when the triangle is a piece of S (docs/design.md §4). Their mean is
   // the other triangles' w there, to O(offset), which the model stored from the tree (β = its own).
   {
     const auto t0 = clock_type::now();

@@ -28,7 +28,7 @@
 // BVH (neither the triangle tree's traversal nor its moments), no cone over ∂M, no boundary
 // extraction, no crossing walk and no symbolic tie-breaks; only the triangle soup (the model's
 // vertices, in any order), the exact per-triangle solid angle, and the bound on where S can lie
-// (the model's box grown by its surface margin, a function of the mesh alone: DESIGN §5).
+// (the model's box grown by its surface margin, a function of the mesh alone: docs/design.md §5).
 // It is O(n) per step and meant for a few hundred rays.
 //
 // Units and conventions follow trace_surface: t in units of the ray's own direction, the hit

@@ -4,7 +4,7 @@
 //  - smooth pieces: a cloud of points on S. Random lines are traced with trace_surface and every
 //    smooth crossing is kept (the accept filter turns all hits down, so the trace goes on to the
 //    end of the line); each crossing is moved onto the exact level (φ = w_C mod 1 by the double
-//    sum over the cone C, DESIGN §3) and kept only when the exact w of the whole mesh is w* there,
+//    sum over the cone C, docs/design.md §3) and kept only when the exact w of the whole mesh is w* there,
 //    i.e. it is a point of S and not of w* ± 1. For a query point the nearest cloud point seeds a
 //    refinement (project onto its tangent plane, back onto the exact level along the normal,
 //    repeat: the fixed point is a foot of the perpendicular), whose points are confirmed the same
