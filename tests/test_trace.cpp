@@ -61,11 +61,6 @@ std::string describe(const ReferenceCrossing& c) {
 
 using test::Random;
 
-vec3 triangle_normal(const Mesh& m, uint32_t t) {
-  const vec3 a = m.positions[m.triangles[t][0]], b = m.positions[m.triangles[t][1]], c = m.positions[m.triangles[t][2]];
-  return glm::normalize(glm::cross(b - a, c - a));
-}
-
 double distance_to_triangle(const Mesh& m, uint32_t t, const dvec3& x) {
   const dvec3 a(m.positions[m.triangles[t][0]]), b(m.positions[m.triangles[t][1]]), c(m.positions[m.triangles[t][2]]);
   return glm::length(closest_point_on_triangle(a, b, c, x).point - x);
@@ -154,6 +149,12 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
 // ---------------------------------------------------------------------------------------------
 
 #ifdef GWNRT_HAVE_EMBREE
+
+// The outward unit normal of triangle t by its winding.
+vec3 triangle_normal(const Mesh& m, uint32_t t) {
+  const vec3 a = m.positions[m.triangles[t][0]], b = m.positions[m.triangles[t][1]], c = m.positions[m.triangles[t][2]];
+  return glm::normalize(glm::cross(b - a, c - a));
+}
 
 struct EmbreeHit {
   bool hit = false;
