@@ -119,6 +119,16 @@ int material_index(const json& j, const std::string& where, const SceneDesc& sce
   fail(where, "no material named \"" + name + "\"");
 }
 
+// Calls read(entry, where) for each entry of the array j[key] (none when there is no key), where
+// is the entry's JSON location for messages.
+template <class Read>
+void for_each_entry(const json& j, const std::string& key, Read read) {
+  if (!j.contains(key)) return;
+  const json& list = j[key];
+  if (!list.is_array()) fail("/" + key, "expected an array");
+  for (size_t i = 0; i < list.size(); ++i) read(list[i], "/" + key + "/" + std::to_string(i));
+}
+
 void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) {
   if (!j.is_object()) fail("/", "expected a JSON object");
   {
@@ -156,58 +166,46 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     s.materials.push_back(Material{});
     s.material_names.push_back("default");
   }
-  if (j.contains("meshes")) {
-    const json& list = j["meshes"];
-    if (!list.is_array()) fail("/meshes", "expected an array");
-    for (size_t i = 0; i < list.size(); ++i) {
-      const std::string where = "/meshes/" + std::to_string(i);
-      const json& e = list[i];
-      MeshDesc d;
-      if (e.contains("plane")) {
-        d.mesh = plane_mesh(number(e["plane"], where + "/plane"));
-        d.source = "plane";
-      } else if (e.contains("file") && e["file"].is_string()) {
-        d.source = e["file"].get<std::string>();
-        d.mesh = read_mesh(d.source, base, where + "/file");
-      } else {
-        fail(where, "expected \"file\" or \"plane\"");
-      }
-      if (e.contains("transform")) apply(transform(e["transform"], where + "/transform"), d.mesh);
-      d.material = e.contains("material") ? material_index(e["material"], where + "/material", s) : 0;
-      s.meshes.push_back(std::move(d));
-    }
-  }
-  if (j.contains("gwn_objects")) {
-    const json& list = j["gwn_objects"];
-    if (!list.is_array()) fail("/gwn_objects", "expected an array");
-    for (size_t i = 0; i < list.size(); ++i) {
-      const std::string where = "/gwn_objects/" + std::to_string(i);
-      const json& e = list[i];
-      GwnObjectDesc d;
-      if (!e.contains("file") || !e["file"].is_string()) fail(where, "expected \"file\"");
+  for_each_entry(j, "meshes", [&](const json& e, const std::string& where) {
+    MeshDesc d;
+    if (e.contains("plane")) {
+      d.mesh = plane_mesh(number(e["plane"], where + "/plane"));
+      d.source = "plane";
+    } else if (e.contains("file") && e["file"].is_string()) {
       d.source = e["file"].get<std::string>();
       d.mesh = read_mesh(d.source, base, where + "/file");
-      if (e.contains("mode")) {
-        const std::string mode = e["mode"].is_string() ? e["mode"].get<std::string>() : "";
-        if (mode == "gwn") d.options.mode = TraceMode::kWindingNumber;
-        else if (mode == "solid-angle") d.options.mode = TraceMode::kSolidAngle;
-        else fail(where + "/mode", "expected \"gwn\" or \"solid-angle\"");
-      }
-      if (e.contains("level")) d.options.level = number(e["level"], where + "/level");
-      if (e.contains("epsilon")) d.options.epsilon = number(e["epsilon"], where + "/epsilon");
-      if (e.contains("max_steps")) d.options.max_steps = uint32_t(integer(e["max_steps"], where + "/max_steps", 1, 1 << 30));
-      if (e.contains("beta")) d.options.beta = number(e["beta"], where + "/beta");
-      if (e.contains("instances")) {
-        if (!e["instances"].is_array()) fail(where + "/instances", "expected an array of transforms");
-        for (size_t k = 0; k < e["instances"].size(); ++k)
-          d.instances.push_back(transform(e["instances"][k], where + "/instances/" + std::to_string(k)));
-      } else {
-        d.instances.push_back(e.contains("transform") ? transform(e["transform"], where + "/transform") : glm::mat4(1.0f));
-      }
-      d.material = e.contains("material") ? material_index(e["material"], where + "/material", s) : 0;
-      s.gwn_objects.push_back(std::move(d));
+    } else {
+      fail(where, "expected \"file\" or \"plane\"");
     }
-  }
+    if (e.contains("transform")) apply(transform(e["transform"], where + "/transform"), d.mesh);
+    d.material = e.contains("material") ? material_index(e["material"], where + "/material", s) : 0;
+    s.meshes.push_back(std::move(d));
+  });
+  for_each_entry(j, "gwn_objects", [&](const json& e, const std::string& where) {
+    GwnObjectDesc d;
+    if (!e.contains("file") || !e["file"].is_string()) fail(where, "expected \"file\"");
+    d.source = e["file"].get<std::string>();
+    d.mesh = read_mesh(d.source, base, where + "/file");
+    if (e.contains("mode")) {
+      const std::string mode = e["mode"].is_string() ? e["mode"].get<std::string>() : "";
+      if (mode == "gwn") d.options.mode = TraceMode::kWindingNumber;
+      else if (mode == "solid-angle") d.options.mode = TraceMode::kSolidAngle;
+      else fail(where + "/mode", "expected \"gwn\" or \"solid-angle\"");
+    }
+    if (e.contains("level")) d.options.level = number(e["level"], where + "/level");
+    if (e.contains("epsilon")) d.options.epsilon = number(e["epsilon"], where + "/epsilon");
+    if (e.contains("max_steps")) d.options.max_steps = uint32_t(integer(e["max_steps"], where + "/max_steps", 1, 1 << 30));
+    if (e.contains("beta")) d.options.beta = number(e["beta"], where + "/beta");
+    if (e.contains("instances")) {
+      if (!e["instances"].is_array()) fail(where + "/instances", "expected an array of transforms");
+      for (size_t k = 0; k < e["instances"].size(); ++k)
+        d.instances.push_back(transform(e["instances"][k], where + "/instances/" + std::to_string(k)));
+    } else {
+      d.instances.push_back(e.contains("transform") ? transform(e["transform"], where + "/transform") : glm::mat4(1.0f));
+    }
+    d.material = e.contains("material") ? material_index(e["material"], where + "/material", s) : 0;
+    s.gwn_objects.push_back(std::move(d));
+  });
   if (j.contains("environment")) {
     const json& e = j["environment"];
     if (e.contains("file")) {
