@@ -42,7 +42,8 @@ inline std::string read_file(const std::string& path) {
 
 inline std::string temp_path(const std::string& stem) {
   static int counter = 0;
-  return ::testing::TempDir() + "gwnrt_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" + stem;
+  return ::testing::TempDir() + "gwnrt_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
+         stem;
 }
 
 struct RunResult {

@@ -13,8 +13,8 @@
 
 #include <tbb/global_control.h>
 
-#include "gwnrt/field/winding_number.h"
 #include "exact_distance.h"
+#include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -25,18 +25,19 @@ using test::load_test_mesh;
 using test::mesh_bounds;
 using test::sample_points;
 
-constexpr uint32_t kAllFields = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldBoundaryDistance;
+constexpr uint32_t kAllFields =
+    kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldBoundaryDistance;
 
 // Bitwise float equality: the batch driver must run the very same arithmetic.
 bool same(float a, float b) { return std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b); }
 
 ::testing::AssertionResult identical(const PointResult& a, const PointResult& b) {
-  const float fa[] = {a.w, a.gradient.x, a.gradient.y, a.gradient.z, a.hessian.xx, a.hessian.xy, a.hessian.xz,
-                      a.hessian.yy, a.hessian.yz, a.hessian.zz, a.unsigned_distance, a.bary_u, a.bary_v,
-                      a.boundary_distance};
-  const float fb[] = {b.w, b.gradient.x, b.gradient.y, b.gradient.z, b.hessian.xx, b.hessian.xy, b.hessian.xz,
-                      b.hessian.yy, b.hessian.yz, b.hessian.zz, b.unsigned_distance, b.bary_u, b.bary_v,
-                      b.boundary_distance};
+  const float fa[] = {a.w,          a.gradient.x,       a.gradient.y, a.gradient.z, a.hessian.xx,        a.hessian.xy,
+                      a.hessian.xz, a.hessian.yy,       a.hessian.yz, a.hessian.zz, a.unsigned_distance, a.bary_u,
+                      a.bary_v,     a.boundary_distance};
+  const float fb[] = {b.w,          b.gradient.x,       b.gradient.y, b.gradient.z, b.hessian.xx,        b.hessian.xy,
+                      b.hessian.xz, b.hessian.yy,       b.hessian.yz, b.hessian.zz, b.unsigned_distance, b.bary_u,
+                      b.bary_v,     b.boundary_distance};
   for (size_t k = 0; k < std::size(fa); ++k)
     if (!same(fa[k], fb[k]))
       return ::testing::AssertionFailure() << "float field " << k << ": " << fa[k] << " vs " << fb[k];
@@ -54,7 +55,8 @@ QueryRequest request_for(int order, bool exact) {
   return r;
 }
 
-std::vector<PointResult> run_batch(const GwnModel& model, const std::vector<vec3>& points, const QueryRequest& request) {
+std::vector<PointResult> run_batch(const GwnModel& model, const std::vector<vec3>& points,
+                                   const QueryRequest& request) {
   std::vector<PointResult> results(points.size());
   const Status s = evaluate_points(model, points, request, results);
   EXPECT_TRUE(s.ok()) << s.message();
@@ -375,7 +377,8 @@ TEST_P(BvhOnRealMeshes, StructureIsSound) {
   for (size_t i = 0; i < n; ++i) ASSERT_EQ(ids[i], i) << "triangle_ids is not a permutation";
   // Leaf-order vertices are the input triangles' corners.
   for (size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) ASSERT_EQ(tree.vertices[3 * i + k], mesh.positions[mesh.triangles[tree.triangle_ids[i]][k]]);
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(tree.vertices[3 * i + k], mesh.positions[mesh.triangles[tree.triangle_ids[i]][k]]);
 
   BvhChecker check(tree);
   const std::vector<uint32_t> all = check.visit(0, 1);

@@ -99,11 +99,11 @@ TEST(Boundary, MultiplicityCountsAndCancels) {
 
 TEST(Boundary, ZeroAreaTrianglesAreIgnored) {
   Mesh m = make_cube();
-  m.triangles.push_back({0, 1, 1});  // repeated corner
-  m.triangles.push_back({0, 0, 0});  // a point
-  m.positions.push_back({0, -1, -1});  // midpoint of the edge 0-1
+  m.triangles.push_back({0, 1, 1});                                 // repeated corner
+  m.triangles.push_back({0, 0, 0});                                 // a point
+  m.positions.push_back({0, -1, -1});                               // midpoint of the edge 0-1
   m.triangles.push_back({0, 1, uint32_t(m.positions.size() - 1)});  // collinear
-  m.triangles.push_back({0, 6, 6});  // repeated corner across the cube's diagonal
+  m.triangles.push_back({0, 6, 6});                                 // repeated corner across the cube's diagonal
   EXPECT_EQ(extract_boundary(m).segment_count(), 0u);
 }
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/field/distance.h"
 #include "exact_distance.h"
+#include "gwnrt/field/distance.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -95,8 +95,8 @@ void check_against_sampling(const std::vector<Tri>& tris, std::mt19937& rng) {
     const double grid_bound = longest_edge(t) / kGrid;
     for (int k = 0; k < kPointsPerTriangle; ++k) {
       // Half the queries near the triangle, where the regions are finely interleaved.
-      const dvec3 x = k % 2 ? dvec3(u(rng), u(rng), u(rng))
-                            : (t.p0 + t.p1 + t.p2) / 3.0 + 0.05 * dvec3(u(rng), u(rng), u(rng));
+      const dvec3 x =
+          k % 2 ? dvec3(u(rng), u(rng), u(rng)) : (t.p0 + t.p1 + t.p2) / 3.0 + 0.05 * dvec3(u(rng), u(rng), u(rng));
       double sampled2 = kInf;
       for (const dvec3& s : samples) sampled2 = std::min(sampled2, glm::dot(s - x, s - x));
       const double sampled = std::sqrt(sampled2);
@@ -156,7 +156,8 @@ TEST(ClosestPointOnSegment, MatchesDenseSampling) {
   constexpr int kSamples = 100000;
   for (int s = 0; s < 60; ++s) {
     const dvec3 a(u(rng), u(rng), u(rng));
-    const dvec3 b = s % 6 == 0 ? a : (s % 6 == 1 ? a + 1e-6 * dvec3(u(rng), u(rng), u(rng)) : dvec3(u(rng), u(rng), u(rng)));
+    const dvec3 b =
+        s % 6 == 0 ? a : (s % 6 == 1 ? a + 1e-6 * dvec3(u(rng), u(rng), u(rng)) : dvec3(u(rng), u(rng), u(rng)));
     // Any point of the segment is within half a sample spacing (length / kSamples) of a sample.
     const double grid_bound = glm::length(b - a) / kSamples;
     for (int k = 0; k < 10; ++k) {
@@ -215,8 +216,8 @@ TEST_P(DistanceOnRealMeshes, UnsignedDistanceMatchesBruteForce) {
     EXPECT_LE(n.u + n.v, 1 + 1e-5f);
     // The barycentrics describe the returned point on the returned triangle.
     const uvec3 t = mesh.triangles[n.primitive];
-    const dvec3 from_bary = (1.0 - n.u - n.v) * dvec3(mesh.positions[t[0]]) + double(n.u) * dvec3(mesh.positions[t[1]]) +
-                            double(n.v) * dvec3(mesh.positions[t[2]]);
+    const dvec3 from_bary = (1.0 - n.u - n.v) * dvec3(mesh.positions[t[0]]) +
+                            double(n.u) * dvec3(mesh.positions[t[1]]) + double(n.v) * dvec3(mesh.positions[t[2]]);
     EXPECT_LT(glm::length(from_bary - dvec3(n.point)), tol);
   }
 }
@@ -240,10 +241,10 @@ TEST_P(DistanceOnRealMeshes, BoundaryDistanceMatchesBruteForce) {
     const double ref = boundary_distance(curve, x);
     EXPECT_NEAR(n.distance, ref, tol);
     ASSERT_LT(n.primitive, curve.segment_count());
-    const double id_dist = glm::length(
-        closest_point_on_segment(dvec3(curve.endpoints[2 * n.primitive]), dvec3(curve.endpoints[2 * n.primitive + 1]), x)
-            .point -
-        x);
+    const double id_dist = glm::length(closest_point_on_segment(dvec3(curve.endpoints[2 * n.primitive]),
+                                                                dvec3(curve.endpoints[2 * n.primitive + 1]), x)
+                                           .point -
+                                       x);
     EXPECT_NEAR(id_dist, ref, tol);
   }
 }
@@ -277,8 +278,10 @@ TEST(BoundaryDistance, OpenCubeIsTheDistanceToItsRim) {
     const double dx = std::max(std::abs(double(x.x)) - 1.0, 0.0), dy = std::max(std::abs(double(x.y)) - 1.0, 0.0);
     const double in_x = 1.0 - std::abs(double(x.x)), in_y = 1.0 - std::abs(double(x.y));
     double planar;  // distance within the plane z = 1 from (x, y) to the square's outline
-    if (dx == 0 && dy == 0) planar = std::min(in_x, in_y);
-    else planar = std::sqrt(dx * dx + dy * dy);
+    if (dx == 0 && dy == 0)
+      planar = std::min(in_x, in_y);
+    else
+      planar = std::sqrt(dx * dx + dy * dy);
     // Float query with O(1) coordinates.
     EXPECT_NEAR(n.distance, std::sqrt(planar * planar + dz * dz), 1e-5);
     EXPECT_NEAR(n.distance, boundary_distance(model.boundary(), dvec3(x)), 1e-5);

@@ -76,7 +76,7 @@ class TempFiles : public ::testing::Test {
 // The small reference mesh: a triangle, a quad, a pentagon and another triangle.
 
 struct Small {
-  std::vector<vec3> positions = {{0, 0, 0},     {1.5f, 0, 0},      {1.5f, 2.25f, 0}, {0, 2.25f, -0.75f},
+  std::vector<vec3> positions = {{0, 0, 0},      {1.5f, 0, 0},     {1.5f, 2.25f, 0}, {0, 2.25f, -0.75f},
                                  {-1, 1, 3.25f}, {0.5f, -0.5f, 1}, {2, 1, -2.5f}};
   std::vector<std::vector<uint32_t>> faces = {{0, 1, 2}, {0, 2, 3, 4}, {1, 5, 6, 2, 3}, {4, 3, 6}};
   std::vector<uvec3> triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {1, 5, 6}, {1, 6, 2}, {1, 2, 3}, {4, 3, 6}};
@@ -279,9 +279,9 @@ TEST_F(TempFiles, DragonRoundTrips) {
   ASSERT_TRUE(load_mesh(data_path("dragon_vrip_res4.ply"), ref).ok());
   for (const char* format : {"binary_little_endian", "binary_big_endian"}) {
     std::string text = std::string("ply\nformat ") + format + " 1.0\nelement vertex " +
-                       std::to_string(ref.positions.size()) + "\nproperty float x\nproperty float y\nproperty float z\n" +
-                       "element face " + std::to_string(ref.triangles.size()) +
-                       "\nproperty list uchar uint vertex_indices\nend_header\n";
+                       std::to_string(ref.positions.size()) +
+                       "\nproperty float x\nproperty float y\nproperty float z\n" + "element face " +
+                       std::to_string(ref.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
     PlyBody b(format);
     for (const vec3& p : ref.positions) {
       for (int k = 0; k < 3; ++k) b.put("float", p[k]);
@@ -381,11 +381,12 @@ TEST_F(TempFiles, SmallPlyAllEncodings) {
   int n = 0;
   for (const auto& [format, name] : formats) {
     for (const PlyTypes& t : variants) {
-      SCOPED_TRACE(format + " xyz=" + t.xyz + " count=" + t.count + " index=" + t.index + " eol=" +
-                   std::to_string(t.eol.size()));
+      SCOPED_TRACE(format + " xyz=" + t.xyz + " count=" + t.count + " index=" + t.index +
+                   " eol=" + std::to_string(t.eol.size()));
       Mesh m;
       MeshLoadReport r;
-      const Status s = load_mesh(write("small" + std::to_string(n++) + ".ply", small_ply(format, ref.positions, t)), m, &r);
+      const Status s =
+          load_mesh(write("small" + std::to_string(n++) + ".ply", small_ply(format, ref.positions, t)), m, &r);
       ASSERT_TRUE(s.ok()) << s.message();
       expect_mesh(m, ref.positions, ref.triangles);
       EXPECT_EQ(r.format, name);
@@ -562,7 +563,9 @@ std::vector<BadCase> bad_cases() {
       {"obj_index_huge.obj", kTri + "f 1 2 99999999999999999999999\n", M, {":4:", "out of range"}},
       {"obj_index_negative.obj", kTri + "f -1 -2 -4\n", M, {":4:", "relative vertex index -4 is out of range"}},
       {"obj_index_negative_early.obj", "v 0 0 0\nf -1 -2 -3\nv 1 0 0\nv 0 1 0\n", M, {":2:", "-2", "out of range"}},
-      {"obj_nan.obj", "v 0 0 0\nv nan 0 1\nv 0 1 0\nf 1 2 3\n", M,
+      {"obj_nan.obj",
+       "v 0 0 0\nv nan 0 1\nv 0 1 0\nf 1 2 3\n",
+       M,
        {":2:", "vertex 2 has a non-finite coordinate (nan, 0, 1)"}},
       {"obj_inf.obj", kTri + "v 0 -inf 0\nf 1 2 3\n", M, {":4:", "vertex 4", "non-finite", "-inf"}},
       {"obj_overflow.obj", kTri + "v 1e999 0 0\nf 1 2 3\n", M, {":4:", "non-finite", "inf"}},
@@ -573,87 +576,130 @@ std::vector<BadCase> bad_cases() {
       {"obj_vertices_only.obj", kTri, M, {"the mesh has no triangles"}},
 
       // PLY header
-      {"ply_bad_magic.ply", "plx\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n", P,
+      {"ply_bad_magic.ply",
+       "plx\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n",
+       P,
        {"not a PLY file"}},
-      {"ply_magic_case.ply", "PLY\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n", P,
+      {"ply_magic_case.ply",
+       "PLY\n" + ply_header("ascii", 4, 1).substr(4) + kQuadVerts + "3 0 1 2\n",
+       P,
        {"not a PLY file"}},
-      {"ply_header_only_no_end.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", P,
+      {"ply_header_only_no_end.ply",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+       P,
        {"no end_header"}},
       {"ply_missing_end_header.ply",
        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-       "element face 1\nproperty list uchar int vertex_indices\n" + kQuadVerts + "3 0 1 2\n",
-       P, {":9:", "missing end_header"}},
-      {"ply_bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", P,
+       "element face 1\nproperty list uchar int vertex_indices\n" +
+           kQuadVerts + "3 0 1 2\n",
+       P,
+       {":9:", "missing end_header"}},
+      {"ply_bad_format.ply",
+       "ply\nformat binary_middle_endian 1.0\nend_header\n",
+       P,
        {":2:", "unsupported PLY format 'binary_middle_endian'"}},
       {"ply_bad_version.ply", "ply\nformat ascii 2.0\nend_header\n", P, {":2:", "version '2.0'"}},
       {"ply_short_format.ply", "ply\nformat ascii\nend_header\n", P, {":2:", "malformed format line"}},
       {"ply_missing_format.ply", "ply\nelement vertex 0\nend_header\n", P, {":2:", "format"}},
       {"ply_no_format_at_all.ply", "ply\ncomment hi\nend_header\n", P, {"no 'format' line"}},
-      {"ply_unknown_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n", P,
+      {"ply_unknown_type.ply",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n",
+       P,
        {":4:", "unknown property type 'flot'"}},
-      {"ply_bad_count.ply", "ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", P,
+      {"ply_bad_count.ply",
+       "ply\nformat ascii 1.0\nelement vertex -1\nend_header\n",
+       P,
        {":3:", "malformed element count '-1'"}},
       {"ply_missing_z.ply",
        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nelement face 1\n"
        "property list uchar int vertex_indices\nend_header\n0 0\n1 0\n0 1\n3 0 1 2\n",
-       P, {"the vertex element has no 'z' property"}},
+       P,
+       {"the vertex element has no 'z' property"}},
       {"ply_no_vertex_element.ply", "ply\nformat ascii 1.0\nend_header\n", P, {"no 'vertex' element"}},
       {"ply_no_face_list.ply",
        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
        "element face 1\nproperty list uchar int corners\nend_header\n0 0 0\n3 0 0 0\n",
-       P, {"no 'vertex_indices' list"}},
-      {"ply_float_index.ply", ply_header("ascii", 4, 1, "float") + kQuadVerts + "3 0 1 2\n", P,
+       P,
+       {"no 'vertex_indices' list"}},
+      {"ply_float_index.ply",
+       ply_header("ascii", 4, 1, "float") + kQuadVerts + "3 0 1 2\n",
+       P,
        {"non-integer index type 'float'"}},
       {"ply_float_count.ply",
        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
        "element face 1\nproperty list float int vertex_indices\nend_header\n0 0 0\n3 0 0 0\n",
-       P, {":8:", "list count type 'float' is not an integer type"}},
-      {"ply_too_many_vertices.ply", ply_header("binary_little_endian", "99999999999", "0"), M,
-       {"too many vertices"}},
+       P,
+       {":8:", "list count type 'float' is not an integer type"}},
+      {"ply_too_many_vertices.ply", ply_header("binary_little_endian", "99999999999", "0"), M, {"too many vertices"}},
 
       // PLY ascii data
-      {"ply_truncated_ascii_vertices.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n", P,
-       {"truncated", "vertex"}},
+      {"ply_truncated_ascii_vertices.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n", P, {"truncated", "vertex"}},
       {"ply_truncated_ascii_vertices_long.ply",
-       ply_header("ascii", 4, 1) + "0.000000 0.000000 0.000000\n1.000000 0.000000 0.000000\n", P,
+       ply_header("ascii", 4, 1) + "0.000000 0.000000 0.000000\n1.000000 0.000000 0.000000\n",
+       P,
        {":11:", "truncated", "vertex 2 of 4"}},
-      {"ply_truncated_ascii_faces.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n", P,
-       {"truncated", "face"}},
-      {"ply_truncated_ascii_face_list.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 2     ", P,
+      {"ply_truncated_ascii_faces.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n", P, {"truncated", "face"}},
+      {"ply_truncated_ascii_face_list.ply",
+       ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 2     ",
+       P,
        {":15:", "truncated", "face 1 of 2"}},
-      {"ply_ascii_bad_number.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 zz 0\n1 1 0\n0 1 0\n3 0 1 2\n", P,
+      {"ply_ascii_bad_number.ply",
+       ply_header("ascii", 4, 1) + "0 0 0\n1 zz 0\n1 1 0\n0 1 0\n3 0 1 2\n",
+       P,
        {":11:", "invalid float value 'zz' in vertex 1, property 'y'"}},
-      {"ply_ascii_float_as_index.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1.5 2\n", P,
+      {"ply_ascii_float_as_index.ply",
+       ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1.5 2\n",
+       P,
        {":14:", "invalid int value '1.5' in face 0"}},
-      {"ply_ascii_uchar_overflow.ply", ply_header("ascii", 4, 1) + kQuadVerts + "300 0 1 2\n", P,
+      {"ply_ascii_uchar_overflow.ply",
+       ply_header("ascii", 4, 1) + kQuadVerts + "300 0 1 2\n",
+       P,
        {":14:", "invalid uchar value '300'"}},
-      {"ply_ascii_trailing_data.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1 2 3\n", P,
+      {"ply_ascii_trailing_data.ply",
+       ply_header("ascii", 4, 1) + kQuadVerts + "3 0 1 2 3\n",
+       P,
        {":14:", "unexpected data '3'"}},
-      {"ply_out_of_range.ply", ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 1 9\n", M,
+      {"ply_out_of_range.ply",
+       ply_header("ascii", 4, 2) + kQuadVerts + "3 0 1 2\n3 0 1 9\n",
+       M,
        {":15:", "face 1 refers to vertex 9 but there are 4 vertices"}},
-      {"ply_negative_index.ply", ply_header("ascii", 4, 1) + kQuadVerts + "3 0 -1 2\n", M,
+      {"ply_negative_index.ply",
+       ply_header("ascii", 4, 1) + kQuadVerts + "3 0 -1 2\n",
+       M,
        {"face 0 refers to vertex -1 but there are 4 vertices"}},
-      {"ply_two_corners.ply", ply_header("ascii", 4, 1) + kQuadVerts + "2 0 1\n", M,
+      {"ply_two_corners.ply",
+       ply_header("ascii", 4, 1) + kQuadVerts + "2 0 1\n",
+       M,
        {"face 0 has 2 corners, needs at least 3"}},
-      {"ply_ascii_nan.ply", ply_header("ascii", 4, 1) + "0 0 0\n1 0 nan\n1 1 0\n0 1 0\n3 0 1 2\n", M,
+      {"ply_ascii_nan.ply",
+       ply_header("ascii", 4, 1) + "0 0 0\n1 0 nan\n1 1 0\n0 1 0\n3 0 1 2\n",
+       M,
        {"vertex 1 has a non-finite coordinate (1, 0, nan)"}},
       {"ply_no_faces.ply", ply_header("ascii", 4, 0) + kQuadVerts, M, {"the mesh has no triangles"}},
 
       // PLY binary data
       {"ply_truncated_binary.ply", good_bin.substr(0, good_bin.size() - 5), P, {"truncated", "face 1 of 2"}},
       {"ply_truncated_binary_vertices.ply", good_bin.substr(0, good_bin.size() - 40), P, {"truncated", "vertex"}},
-      {"ply_binary_nan.ply", binary_ply("binary_little_endian", {{0, 0, 0}, {1, 0, 0}, {0, nan, 0}}, {{0, 1, 2}}), M,
+      {"ply_binary_nan.ply",
+       binary_ply("binary_little_endian", {{0, 0, 0}, {1, 0, 0}, {0, nan, 0}}, {{0, 1, 2}}),
+       M,
        {"vertex 2 has a non-finite coordinate (0, nan, 0)"}},
       {"ply_binary_be_inf.ply",
        binary_ply("binary_big_endian", {{0, 0, 0}, {1, 0, 0}, {0, 0, std::numeric_limits<float>::infinity()}},
                   {{0, 1, 2}}),
-       M, {"vertex 2 has a non-finite coordinate (0, 0, inf)"}},
-      {"ply_binary_out_of_range.ply", binary_ply("binary_big_endian", quad, {{0, 1, 2}, {0, 2, 3}, {3, 4, 0}}), M,
+       M,
+       {"vertex 2 has a non-finite coordinate (0, 0, inf)"}},
+      {"ply_binary_out_of_range.ply",
+       binary_ply("binary_big_endian", quad, {{0, 1, 2}, {0, 2, 3}, {3, 4, 0}}),
+       M,
        {"face 2 refers to vertex 4 but there are 4 vertices"}},
-      {"ply_binary_negative.ply", binary_ply("binary_little_endian", quad, {{0, 1, 2}, {0, -7, 3}}), M,
+      {"ply_binary_negative.ply",
+       binary_ply("binary_little_endian", quad, {{0, 1, 2}, {0, -7, 3}}),
+       M,
        {"face 1 refers to vertex -7"}},
       {"ply_binary_forged_count.ply",
-       ply_header("binary_little_endian", "4000000000", "1") + "\x01\x02\x03", P,
+       ply_header("binary_little_endian", "4000000000", "1") + "\x01\x02\x03",
+       P,
        {"truncated", "4000000000 vertex elements"}},
   };
 }
@@ -715,7 +761,8 @@ TEST_F(TempFiles, RandomBytesFail) {
     // Past a valid header, the bytes are data: they must be read safely too.
     const std::string header = ply_header("binary_little_endian", 100, 100);
     Mesh m;
-    const Status s = load_mesh(write("random_body" + std::to_string(seed) + ".ply", header + random_bytes(1000, seed)), m);
+    const Status s =
+        load_mesh(write("random_body" + std::to_string(seed) + ".ply", header + random_bytes(1000, seed)), m);
     EXPECT_FALSE(s.ok());
   }
 }

@@ -14,9 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_util.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
-#include "cli_util.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -86,7 +86,8 @@ class QueryCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
     binary_ = query_binary();
-    if (binary_.empty()) GTEST_SKIP() << "gwnrt-query not built next to the tests (expected <tests>/../examples/gwnrt-query)";
+    if (binary_.empty())
+      GTEST_SKIP() << "gwnrt-query not built next to the tests (expected <tests>/../examples/gwnrt-query)";
   }
   std::string binary_;
 };
@@ -94,8 +95,8 @@ class QueryCliTest : public ::testing::Test {
 TEST_F(QueryCliTest, AllFieldsMatchLibraryInInputOrder) {
   const std::vector<vec3> points = load_points(probe_points_path());
   ASSERT_GE(points.size(), 150u);
-  const RunResult r =
-      run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields w,grad,hess,udist,bdist");
+  const RunResult r = run_query(
+      binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields w,grad,hess,udist,bdist");
   ASSERT_TRUE(r.exited);
   ASSERT_EQ(r.exit_code, 0) << r.err;
 
@@ -155,7 +156,8 @@ TEST_F(QueryCliTest, DefaultIsWOnlyAndOptionsChangeNothingButColumns) {
 
 TEST_F(QueryCliTest, ClosedMeshPrintsInfiniteBoundaryDistance) {
   const std::string closed_mesh = test::data_path("bunny.obj");
-  const RunResult r = run_query(binary_, quote(closed_mesh) + " --points " + quote(probe_points_path()) + " --fields bdist");
+  const RunResult r =
+      run_query(binary_, quote(closed_mesh) + " --points " + quote(probe_points_path()) + " --fields bdist");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Csv csv = parse_csv(r.out);
   ASSERT_FALSE(csv.rows.empty());
@@ -213,11 +215,8 @@ TEST_F(QueryCliTest, MalformedPointsNameTheLine) {
     std::string text, where;
   };
   const std::vector<Case> cases = {
-      {"# header\n0 0 0\n1 2\n", ":3:"},
-      {"0 0 0\n\n1 2 3 4\n", ":3:"},
-      {"1 2 x\n", ":1:"},
-      {"0 0 0\n1 nan 0\n", ":2:"},
-      {"0 0 0\n1 1e99 0\n", ":2:"},
+      {"# header\n0 0 0\n1 2\n", ":3:"}, {"0 0 0\n\n1 2 3 4\n", ":3:"}, {"1 2 x\n", ":1:"},
+      {"0 0 0\n1 nan 0\n", ":2:"},       {"0 0 0\n1 1e99 0\n", ":2:"},
   };
   for (const Case& c : cases) {
     const std::string points = temp_path("bad_points.txt");
@@ -295,11 +294,12 @@ TEST_F(QueryCliTest, SignedDistanceFieldsMatchLibraryAtAnyLevel) {
   ASSERT_TRUE(load_mesh(mesh, loaded).ok());
   GwnModel model = test::build_model(loaded);
 
-  const std::vector<std::string> expected_header = {"x",      "y",      "z",      "sdf",        "sdf_piece",
-                                                    "sdf1",   "sdf2",   "sheet_dist", "proj_x", "proj_y",
-                                                    "proj_z", "proj_iters", "proj_converged", "hbound"};
+  const std::vector<std::string> expected_header = {
+      "x",          "y",      "z",      "sdf",    "sdf_piece",  "sdf1",           "sdf2",
+      "sheet_dist", "proj_x", "proj_y", "proj_z", "proj_iters", "proj_converged", "hbound"};
   for (const float level : {0.5f, 0.3f}) {
-    std::string args = quote(mesh) + " --points " + quote(points_file) + " --fields sdf,sdf1,sdf2,sheet_dist,proj,hbound";
+    std::string args =
+        quote(mesh) + " --points " + quote(points_file) + " --fields sdf,sdf1,sdf2,sheet_dist,proj,hbound";
     if (level != 0.5f) args += " --level 0.3";
     const RunResult r = run_query(binary_, args);
     ASSERT_TRUE(r.exited);
@@ -312,7 +312,8 @@ TEST_F(QueryCliTest, SignedDistanceFieldsMatchLibraryAtAnyLevel) {
     // printing), the piece by name.
     ASSERT_TRUE(model.set_sheet_level(level).ok());
     QueryRequest request;
-    request.fields = kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance | kFieldProjection | kFieldHarnackBound;
+    request.fields =
+        kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance | kFieldProjection | kFieldHarnackBound;
     request.level = level;
     std::vector<PointResult> e(points.size());
     ASSERT_TRUE(evaluate_points(model, points, request, e).ok());

@@ -3,15 +3,15 @@
 // and traced hits through a cube's edges and vertices are still reported.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "brute_force_winding.h"
 #include "gwnrt/trace/ray.h"
 #include "gwnrt/trace/surface_trace.h"
-#include "brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -92,7 +92,8 @@ TEST(RayCrossing, SharedEdgeOfTwoTrianglesIsCrossedOnce) {
 TEST(RayCrossing, InteriorVertexOfAFanIsCrossedOnce) {
   // A planar fan of eight triangles around the origin (dyadic rim), and lines through the centre
   // vertex and through the midpoints of its spokes.
-  std::vector<vec3> rim = {{1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {0, -1, 0}, {1, -1, 0}};
+  std::vector<vec3> rim = {{1, 0, 0},  {1, 1, 0},   {0, 1, 0},  {-1, 1, 0},
+                           {-1, 0, 0}, {-1, -1, 0}, {0, -1, 0}, {1, -1, 0}};
   std::vector<vec3> fan;
   for (size_t k = 0; k < rim.size(); ++k) fan.insert(fan.end(), {vec3(0.0f), rim[k], rim[(k + 1) % rim.size()]});
   std::vector<vec3> targets = {vec3(0.0f)};
@@ -269,13 +270,13 @@ TEST(RayCrossing, TracedCubeHitsThroughEdgesAndVertices) {
     bool from_inside;
   };
   std::vector<Case> cases = {
-      {vec3(-2.0f), vec3(1.0f), 1.0f, false},                        // vertex (-1,-1,-1)
+      {vec3(-2.0f), vec3(1.0f), 1.0f, false},                           // vertex (-1,-1,-1)
       {vec3(-2.0f, 0.0f, -2.0f), vec3(1.0f, 0.0f, 1.0f), 1.0f, false},  // edge midpoint (-1,0,-1)
       {vec3(-2.0f, -2.0f, 0.5f), vec3(1.0f, 1.0f, 0.0f), 1.0f, false},  // edge x=y=-1
       {vec3(-3.0f, 0.0f, 0.0f), vec3(2.0f, 0.0f, 0.0f), 1.0f, false},   // face centre
-      {vec3(0.0f), vec3(1.0f), 1.0f, true},                          // out through vertex (1,1,1)
-      {vec3(0.0f), vec3(0.5f, 0.5f, 0.0f), 2.0f, true},              // out through edge midpoint
-      {vec3(0.0f, 0.0f, 0.25f), vec3(-1.0f, 1.0f, 0.0f), 1.0f, true},  // out through edge x=-1,y=1
+      {vec3(0.0f), vec3(1.0f), 1.0f, true},                             // out through vertex (1,1,1)
+      {vec3(0.0f), vec3(0.5f, 0.5f, 0.0f), 2.0f, true},                 // out through edge midpoint
+      {vec3(0.0f, 0.0f, 0.25f), vec3(-1.0f, 1.0f, 0.0f), 1.0f, true},   // out through edge x=-1,y=1
   };
   // All 8 vertices and 12 edge midpoints, from outside along the diagonal through them.
   for (int x = -1; x <= 1; ++x)

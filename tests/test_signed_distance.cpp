@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "brute_force_winding.h"
+#include "exact_distance.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "gwnrt/sdf/signed_distance.h"
-#include "brute_force_winding.h"
-#include "exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -64,7 +64,8 @@ dvec3 unit_normal(const Mesh& m, size_t t) {
 
 dvec3 centroid(const Mesh& m, size_t t) {
   return (dvec3(m.positions[m.triangles[t][0]]) + dvec3(m.positions[m.triangles[t][1]]) +
-          dvec3(m.positions[m.triangles[t][2]])) / 3.0;
+          dvec3(m.positions[m.triangles[t][2]])) /
+         3.0;
 }
 
 // The largest gap between a polyhedron inscribed in the unit sphere and the sphere: 1 minus the
@@ -190,7 +191,8 @@ ClassificationStats check_classification(const GwnModel& model, const Mesh& mesh
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const double r = reference[t];
     const float stored = model.other_winding()[t];
-    EXPECT_EQ(in_tree[t], is_sheet(stored, level, model.sheet_jump()[t])) << "triangle " << t << ": the tree disagrees with is_sheet";
+    EXPECT_EQ(in_tree[t], is_sheet(stored, level, model.sheet_jump()[t]))
+        << "triangle " << t << ": the tree disagrees with is_sheet";
     if (std::isnan(r)) {
       EXPECT_TRUE(std::isnan(stored)) << t;
       continue;
@@ -208,8 +210,8 @@ ClassificationStats check_classification(const GwnModel& model, const Mesh& mesh
       ++stats.ambiguous;
       continue;
     }
-    EXPECT_EQ(in_tree[t], std::fabs(r - level) < 0.5) << "triangle " << t << " level " << level << " reference " << r
-                                                      << " stored " << stored;
+    EXPECT_EQ(in_tree[t], std::fabs(r - level) < 0.5)
+        << "triangle " << t << " level " << level << " reference " << r << " stored " << stored;
     stats.sheets += in_tree[t];
   }
   return stats;
@@ -226,7 +228,6 @@ std::vector<double> reference_other_windings(const Mesh& mesh, const reference::
   return out;
 }
 
-
 // A point uniform in the disk of radius `radius` about the origin (the hemisphere's rim disk).
 glm::vec2 uniform_in_disk(test::Random& rng, float radius) {
   const float r = radius * std::sqrt(rng.uniform(0.0f, 1.0f)), a = rng.uniform(0.0f, 2.0f * float(kPi));
@@ -241,7 +242,8 @@ TEST(Sheets, ClosedSphereEveryTriangleIsASheetWithOtherWindingOneHalf) {
   GwnModel model = build_model(mesh);
   const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
   const std::vector<double> reference = reference_other_windings(mesh, ref);
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) EXPECT_NEAR(reference[t], 0.5, 1e-6) << "reference, triangle " << t;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    EXPECT_NEAR(reference[t], 0.5, 1e-6) << "reference, triangle " << t;
   EXPECT_EQ(model.sheet_level(), 0.5f);
   const ClassificationStats s = check_classification(model, mesh, reference);
   EXPECT_EQ(model.sheet_tree().view().triangle_count, mesh.triangles.size());
@@ -353,8 +355,8 @@ TEST(Sheets, ZeroAreaTrianglesAreNeverSheets) {
   Mesh mesh = make_hemisphere(8, 32);
   const size_t shell = mesh.triangles.size();
   const uint32_t base = uint32_t(mesh.positions.size());
-  mesh.positions.insert(mesh.positions.end(), {{0.1f, 0.0f, 0.3f}, {0.2f, 0.0f, 0.3f}, {0.3f, 0.0f, 0.3f},
-                                               {0.1f, 0.1f, 0.3f}});
+  mesh.positions.insert(mesh.positions.end(),
+                        {{0.1f, 0.0f, 0.3f}, {0.2f, 0.0f, 0.3f}, {0.3f, 0.0f, 0.3f}, {0.1f, 0.1f, 0.3f}});
   mesh.triangles.push_back({base, base + 1, base + 3});  // proper: the control
   mesh.triangles.push_back({base, base + 1, base + 2});  // collinear
   mesh.triangles.push_back({base, base, base + 3});      // repeated corner
@@ -437,8 +439,12 @@ TEST(SignedDistance, ClosedSphereIsRadiusMinusOneToTheChordSag) {
     worst_analytic = std::max(worst_analytic, std::fabs(sdf - (radius - 1.0)));
     EXPECT_NEAR(std::fabs(sdf), brute, 2e-6) << str(points[i]);
     EXPECT_NEAR(sdf, radius - 1.0, sag + 1e-6) << str(points[i]);
-    if (radius < 1.0 - sag) { EXPECT_LT(sdf, 0.0f) << str(points[i]); }
-    if (radius > 1.0) { EXPECT_GT(sdf, 0.0f) << str(points[i]); }
+    if (radius < 1.0 - sag) {
+      EXPECT_LT(sdf, 0.0f) << str(points[i]);
+    }
+    if (radius > 1.0) {
+      EXPECT_GT(sdf, 0.0f) << str(points[i]);
+    }
     EXPECT_EQ(r[i].sdf.sheet_distance, std::fabs(sdf));
   }
   std::printf("closed sphere: sag %.2e, max |sdf - (|x| - 1)| %.2e, max ||sdf| - brute| %.2e\n", sag, worst_analytic,
@@ -539,8 +545,12 @@ TEST(SignedDistance, HemisphereNearShellIsTheSheetDistance) {
     EXPECT_NEAR(res[i].sdf.distance, reference, 1e-6) << str(points[i]);
     EXPECT_NEAR(res[i].sdf.sheet_distance, h.shell_distance(x), 1e-6) << str(points[i]);
     const double radius = glm::length(x);
-    if (radius < 1.0 - sag) { EXPECT_LT(res[i].sdf.distance, 0.0f) << str(points[i]); }
-    if (radius > 1.0) { EXPECT_GT(res[i].sdf.distance, 0.0f) << str(points[i]); }
+    if (radius < 1.0 - sag) {
+      EXPECT_LT(res[i].sdf.distance, 0.0f) << str(points[i]);
+    }
+    if (radius > 1.0) {
+      EXPECT_GT(res[i].sdf.distance, 0.0f) << str(points[i]);
+    }
   }
 }
 
@@ -578,7 +588,9 @@ TEST(SignedDistance, CurvatureCorrectionHalvesTheErrorOnTheDiskAxis) {
     EXPECT_LT(std::fabs(got2), std::fabs(got1)) << "z " << z;
     // The ratio -1/2 + O(z²): -0.493 at z = 0.05, -0.30 at z = 0.3 (from the closed forms).
     EXPECT_NEAR(got2 / got1, err2 / err1, 0.02) << "z " << z;
-    if (std::fabs(z) <= 0.08) { EXPECT_NEAR(got2 / got1, -0.5, 0.03) << "z " << z; }
+    if (std::fabs(z) <= 0.08) {
+      EXPECT_NEAR(got2 / got1, -0.5, 0.03) << "z " << z;
+    }
     std::printf("axis z %+.2f: sdf1 error %+.3e (analytic %+.3e), sdf2 error %+.3e (analytic %+.3e)\n", z, got1, err1,
                 got2, err2);
   }
@@ -593,7 +605,8 @@ std::vector<glm::dvec2> level_curve(const HemisphereReference& h, double level, 
   for (int i = 0; i <= samples; ++i) {
     const double rho = rho_max * i / samples;
     double a = z_lo, b = z_hi;
-    if (!(reference::reference_w(h.exact, {rho, 0, a}) < level && reference::reference_w(h.exact, {rho, 0, b}) > level)) continue;
+    if (!(reference::reference_w(h.exact, {rho, 0, a}) < level && reference::reference_w(h.exact, {rho, 0, b}) > level))
+      continue;
     for (int it = 0; it < 40; ++it) {
       const double m = 0.5 * (a + b);
       (reference::reference_w(h.exact, {rho, 0, m}) < level ? a : b) = m;
@@ -641,7 +654,8 @@ TEST(SignedDistance, CurvatureCorrectionWinsOnACurvedLevel) {
     const dvec3 x(points[i]);
     const double d = distance_to_curve(curve, {x.x, x.z});
     const double reference = reference::reference_w(h.exact, x) > 0.3 ? -d : d;
-    const double e1 = std::fabs(res[i].sdf.first_order - reference), e2 = std::fabs(res[i].sdf.second_order - reference);
+    const double e1 = std::fabs(res[i].sdf.first_order - reference),
+                 e2 = std::fabs(res[i].sdf.second_order - reference);
     worst1 = std::max(worst1, e1);
     worst2 = std::max(worst2, e2);
     EXPECT_EQ(res[i].sdf.piece, DistancePiece::kSmooth) << str(points[i]);
@@ -692,8 +706,8 @@ TEST(SignedDistance, ContinuousWhereThePieceSwitches) {
         const float step = std::fabs(r[i + 1].sdf.distance - r[i].sdf.distance);
         worst = std::max(worst, double(step / ds));
         EXPECT_LE(step, 1.1f * ds + (exact ? 0.0f : 1e-3f))
-            << seg.what << (exact ? " exact" : " tree") << " between " << str(points[i]) << " and " << str(points[i + 1])
-            << ": " << r[i].sdf.distance << " -> " << r[i + 1].sdf.distance;
+            << seg.what << (exact ? " exact" : " tree") << " between " << str(points[i]) << " and "
+            << str(points[i + 1]) << ": " << r[i].sdf.distance << " -> " << r[i + 1].sdf.distance;
         switches += r[i + 1].sdf.piece != r[i].sdf.piece;
         seen[unsigned(r[i].sdf.piece)] = true;
       }
@@ -961,7 +975,8 @@ TEST(SignedDistance, ModelBuiltWithoutSheetsRefusesSdfUntilClassified) {
     EXPECT_FALSE(s.ok());
     EXPECT_NE(s.message().find("set_sheet_level"), std::string::npos) << s.message();
   }
-  EXPECT_TRUE(evaluate_points(model, points, sdf_request(kFieldPseudoDistance | kFieldHarnackBound | kFieldW), results).ok());
+  EXPECT_TRUE(
+      evaluate_points(model, points, sdf_request(kFieldPseudoDistance | kFieldHarnackBound | kFieldW), results).ok());
   ASSERT_TRUE(model.set_sheet_level(0.5f).ok());
   ASSERT_TRUE(evaluate_points(model, points, sdf_request(kFieldSignedDistance), results).ok());
   const GwnModel reference = build_model(mesh);
@@ -1031,8 +1046,8 @@ TEST(SignedDistance, NonFinitePointsDoNotCrash) {
   // finite sdf or converged projection claimed for a NaN point.
   const GwnModel model = build_model(make_hemisphere(8, 32));
   const float inf = std::numeric_limits<float>::infinity();
-  const std::vector<vec3> points = {{kNaN, 0.0f, 0.0f}, {0.0f, kNaN, 0.5f}, {kNaN, kNaN, kNaN}, {inf, 0.0f, 0.0f},
-                                    {0.0f, 0.0f, -inf}, {0.1f, 0.1f, 0.1f}};
+  const std::vector<vec3> points = {{kNaN, 0.0f, 0.0f}, {0.0f, kNaN, 0.5f}, {kNaN, kNaN, kNaN},
+                                    {inf, 0.0f, 0.0f},  {0.0f, 0.0f, -inf}, {0.1f, 0.1f, 0.1f}};
   for (bool exact : {false, true}) {
     const std::vector<PointResult> r =
         evaluate(model, points,

@@ -15,9 +15,9 @@
 
 #include <tbb/parallel_for.h>
 
-#include "gwnrt/trace/surface_trace.h"
-#include "gwnrt/field/winding_number.h"
 #include "first_crossing.h"
+#include "gwnrt/field/winding_number.h"
+#include "gwnrt/trace/surface_trace.h"
 #include "test_util.h"
 
 #ifdef GWNRT_HAVE_EMBREE
@@ -27,11 +27,11 @@
 namespace gwnrt {
 namespace {
 
-using test::build_model;
-using test::load_test_mesh;
 using reference::ReferenceCrossing;
 using reference::ReferenceMesh;
 using reference::ReferenceMode;
+using test::build_model;
+using test::load_test_mesh;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -41,8 +41,8 @@ Aabb grown(const Aabb& b, float by) { return Aabb{b.lo - vec3(by), b.hi + vec3(b
 
 std::string describe(const Ray& r) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "ray origin (%.9g, %.9g, %.9g) direction (%.9g, %.9g, %.9g)", r.origin.x,
-                r.origin.y, r.origin.z, r.direction.x, r.direction.y, r.direction.z);
+  std::snprintf(buf, sizeof buf, "ray origin (%.9g, %.9g, %.9g) direction (%.9g, %.9g, %.9g)", r.origin.x, r.origin.y,
+                r.origin.z, r.direction.x, r.direction.y, r.direction.z);
   return buf;
 }
 
@@ -125,7 +125,8 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
     ASSERT_TRUE(o.hit);
     EXPECT_NEAR(o.t, 1.0, 0.02);
     // Solid-angle mode: a closed mesh has no smooth level set.
-    EXPECT_FALSE(reference::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400, ReferenceMode::kSolidAngle).hit);
+    EXPECT_FALSE(
+        reference::reference_first_crossing(sref, r, 0.5, grown(sref.box, 1.0f), 400, ReferenceMode::kSolidAngle).hit);
   }
   // A flat square's level 1/2 in solid-angle mode is the square itself (w → ∓1/2 on either
   // side, |w| < 1/2 elsewhere): reached smoothly from both sides.
@@ -300,7 +301,7 @@ TEST(TraceWatertight, CubeMatchesEmbree) { check_against_embree(test::make_cube(
 TEST(TraceWatertight, ClosedMeshTakesNoHarnackSteps) {
   for (const char* name : {"bunny", "sphere", "cube"}) {
     SCOPED_TRACE(name);
-    const Mesh mesh = std::string(name) == "bunny" ? load_test_mesh("bunny.obj")
+    const Mesh mesh = std::string(name) == "bunny"    ? load_test_mesh("bunny.obj")
                       : std::string(name) == "sphere" ? test::make_sphere(2)
                                                       : test::make_cube();
     const GwnModel model = build_model(mesh);
@@ -377,8 +378,8 @@ struct Comparison {
   std::string report() const {
     std::ostringstream s;
     s << rays << " rays: " << agree << " hits agree (" << agree_smooth << " smooth, " << agree_sheet << " sheet), "
-      << both_miss << " both miss, " << refined << " refined, " << grazing << " grazing, " << unstable
-      << " unstable, " << capped << " capped, " << failures << " failures, max normal angle " << max_normal_angle;
+      << both_miss << " both miss, " << refined << " refined, " << grazing << " grazing, " << unstable << " unstable, "
+      << capped << " capped, " << failures << " failures, max normal angle " << max_normal_angle;
     return s.str();
   }
 };
@@ -526,8 +527,8 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
       const dvec3 xg(h.position);
       const dvec3 gx = reference::reference_gradient(ref, xg);
       const double rate_x = std::fabs(glm::dot(gx, p.direction));
-      const double local = h.kind == HitKind::kSheet ? t_round
-                                                      : 2.0 * (tol.delta_w + eps * glm::length(gx)) / rate_x + t_round;
+      const double local =
+          h.kind == HitKind::kSheet ? t_round : 2.0 * (tol.delta_w + eps * glm::length(gx)) / rate_x + t_round;
       if (local < 0.05 * diag) {
         const reference::ReferenceProfile fine =
             reference::reference_profile_between(ref, r, std::max(p.s.front(), s_trace - local), s_trace + local, 16);
@@ -563,13 +564,29 @@ Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& re
   int printed = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
     switch (verdicts[i]) {
-      case 0: ++out.both_miss; break;
-      case 1: ++out.agree; ++out.agree_smooth; break;
-      case 2: ++out.agree; ++out.agree_sheet; break;
-      case 3: ++out.refined; break;
-      case 4: ++out.grazing; break;
-      case 5: ++out.unstable; break;
-      case 7: ++out.capped; break;
+      case 0:
+        ++out.both_miss;
+        break;
+      case 1:
+        ++out.agree;
+        ++out.agree_smooth;
+        break;
+      case 2:
+        ++out.agree;
+        ++out.agree_sheet;
+        break;
+      case 3:
+        ++out.refined;
+        break;
+      case 4:
+        ++out.grazing;
+        break;
+      case 5:
+        ++out.unstable;
+        break;
+      case 7:
+        ++out.capped;
+        break;
       default:
         ++out.failures;
         if (printed++ < 10) ADD_FAILURE() << "ray " << i << ": " << messages[i];
@@ -664,7 +681,6 @@ Aabb reference_box(const GwnModel& model) {
   return grown(model.bounds(), 1.5f * model.surface_margin() + 0.1f * float(box_diagonal(model.bounds())));
 }
 
-
 void expect_meaningful(const Comparison& c, size_t min_smooth, size_t min_sheet) {
   EXPECT_EQ(c.failures, 0u) << c.report();
   // Relaxed rays (grazing or unstable) must stay rare, or the comparison would say little.
@@ -726,8 +742,8 @@ TEST(TraceOpenMesh, MultipoleErrorOnTheLevelSetIsBounded) {
       max_g = std::max(max_g, glm::length(dvec3(sample.gradient) - c.gradient) / glm::length(c.gradient));
       ++points;
     }
-    std::printf("[ %s ] multipole at %zu level-set points: |dw| <= %.3g, |dgrad|/|grad| <= %.3g\n", name, points,
-                max_w, max_g);
+    std::printf("[ %s ] multipole at %zu level-set points: |dw| <= %.3g, |dgrad|/|grad| <= %.3g\n", name, points, max_w,
+                max_g);
     EXPECT_GT(points, rays.size() / 20);
     EXPECT_LE(max_w, kMultipoleTolerance.delta_w);
     EXPECT_LE(max_g, kMultipoleTolerance.normal_angle);
@@ -891,7 +907,6 @@ INSTANTIATE_TEST_SUITE_P(Meshes, TraceLevel,
                          ::testing::Values(OpenCase{"bunny_holes", 90}, OpenCase{"open_cube", 1000}),
                          [](const auto& info) { return std::string(info.param.name); });
 
-
 // ---------------------------------------------------------------------------------------------
 // 5. Fuzz: every ray terminates with a coherent, finite answer.
 // ---------------------------------------------------------------------------------------------
@@ -957,7 +972,7 @@ std::vector<Ray> fuzz_rays(const GwnModel& model, size_t per_kind, uint32_t seed
     add(midpoint(), rng.unit());
     if (!rim.empty()) {
       const size_t s = 2 * size_t(rng.index(int(rim.size() / 2)));
-      add(rim[s], rim[s + 1] - rim[s]);          // along a boundary edge, from its start
+      add(rim[s], rim[s + 1] - rim[s]);                          // along a boundary edge, from its start
       add(rim[s] - (rim[s + 1] - rim[s]), rim[s + 1] - rim[s]);  // the same line, from before it
     }
     vec3 axis(0.0f);
@@ -1049,7 +1064,8 @@ TEST_P(TraceFuzz, EveryRayTerminatesCoherently) {
                         h.steps == g.steps && h.crossings == g.crossings && h.position == g.position &&
                         h.normal == g.normal && (g.hit ? h.t * scale == g.t : h.t == g.t);
       ASSERT_TRUE(same) << "direction scaled by " << scale << "\n"
-                        << describe(rays[i]) << "\n" << describe(g) << "\nscaled: " << describe(h);
+                        << describe(rays[i]) << "\n"
+                        << describe(g) << "\nscaled: " << describe(h);
     }
   }
   // Any other scale (here 1e-6 and 1e6) rounds the direction by an ulp or so: on rays without
@@ -1217,7 +1233,6 @@ TEST(TraceFuzz, StepAndCrossingCapsEndRaysAsCapped) {
   EXPECT_EQ(uncapped_same, uncapped);
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // 8. Filters: trace_surface with an accept functor is offered every hit in increasing t and goes
 //    on past those it turns down (what the Embree plugin's intersection filters rest on).
@@ -1309,7 +1324,8 @@ TEST(TraceFilter, RejectingTheFirstHitReportsTheSecondOnAnOpenMesh) {
     firsts[i] = reference::reference_crossing(ref, profile, 0.5);
     if (!firsts[i].hit) return;
     const double past = firsts[i].s + 1e-4 * diag;
-    seconds[i] = reference::reference_crossing(ref, reference::reference_profile_between(ref, rays[i], past, profile.s.back(), 1500), 0.5);
+    seconds[i] = reference::reference_crossing(
+        ref, reference::reference_profile_between(ref, rays[i], past, profile.s.back(), 1500), 0.5);
   });
   size_t compared = 0, smooth_first = 0, agree = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
@@ -1324,7 +1340,8 @@ TEST(TraceFilter, RejectingTheFirstHitReportsTheSecondOnAnOpenMesh) {
     const double len = glm::length(dvec3(r.direction));
     // Sheets to float round-off; smooth pieces to where the stopping test may end, as in §2.
     auto tolerance = [&](const ReferenceCrossing& c) {
-      return c.sheet ? 1e-5 * diag : 2.0 * (kMultipoleTolerance.delta_w + eps * glm::length(c.gradient)) / c.rate + 1e-5 * diag;
+      return c.sheet ? 1e-5 * diag
+                     : 2.0 * (kMultipoleTolerance.delta_w + eps * glm::length(c.gradient)) / c.rate + 1e-5 * diag;
     };
     EXPECT_EQ(h.hit, second.hit) << describe(r) << "\n" << describe(h);
     if (h.hit && second.hit) {

@@ -12,9 +12,9 @@
 #include <gtest/gtest.h>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
 #include "point_mix.h"
 
 namespace gwnrt::test {
@@ -73,11 +73,11 @@ inline Mesh make_hexagon_fan() {
 inline Mesh make_sphere(int levels, float radius = 1.0f) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
   Mesh m;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (auto& p : m.positions) p = glm::normalize(p);
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
@@ -103,8 +103,8 @@ inline Mesh make_sphere(int levels, float radius = 1.0f) {
 inline Mesh make_cube(bool open_top = false) {
   Mesh m;
   m.positions = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
-  m.triangles = {{0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5},
-                 {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  m.triangles = {{0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4}, {1, 2, 6},
+                 {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
   if (!open_top) m.triangles.insert(m.triangles.end(), {{4, 5, 6}, {4, 6, 7}});
   return m;
 }
@@ -116,6 +116,8 @@ inline Aabb mesh_bounds(const Mesh& m) {
 }
 
 // The benchmark's point mix (examples/common/point_mix.h).
-inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) { return point_mix(box, count, seed); }
+inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) {
+  return point_mix(box, count, seed);
+}
 
 }  // namespace gwnrt::test

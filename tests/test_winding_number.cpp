@@ -226,8 +226,7 @@ TEST_P(DerivativesOnRealMeshes, GradientAndHessianMatchFiniteDifferences) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Meshes, DerivativesOnRealMeshes,
-                         ::testing::Values("bunny_holes.obj", "teapot.obj"));
+INSTANTIATE_TEST_SUITE_P(Meshes, DerivativesOnRealMeshes, ::testing::Values("bunny_holes.obj", "teapot.obj"));
 
 TEST(WindingNumber, FarFieldDerivativesAreTheDerivativesOfItsValue) {
   // Self-consistency of the expansion formulas: the order-k gradient and Hessian must be the
@@ -243,7 +242,8 @@ TEST(WindingNumber, FarFieldDerivativesAreTheDerivativesOfItsValue) {
     for (int i = 0; i < 3; ++i) {
       vec3 e(0.0f);
       e[i] = h;
-      const float fd = (winding_number(view, x + e, {order, 2.0f}).w - winding_number(view, x - e, {order, 2.0f}).w) / (2 * h);
+      const float fd =
+          (winding_number(view, x + e, {order, 2.0f}).w - winding_number(view, x - e, {order, 2.0f}).w) / (2 * h);
       EXPECT_NEAR(s.gradient[i], fd, 2e-3f * glm::length(s.gradient) + 1e-9f) << "order " << order << " axis " << i;
       const WindingSample sp = winding_number(view, x + e, {order, 2.0f}, true, false);
       const WindingSample sm = winding_number(view, x - e, {order, 2.0f}, true, false);

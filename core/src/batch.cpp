@@ -13,11 +13,11 @@ namespace {
 // else out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
 // validate runs between the two checks, so a batch of the wrong size is reported as that first.
 template <class In, class Out, class Validate, class Fn>
-Status parallel_map(const char* name, const char* items, const char* slots, std::span<const In> in,
-                    std::span<Out> out, size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn) {
+Status parallel_map(const char* name, const char* items, const char* slots, std::span<const In> in, std::span<Out> out,
+                    size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn) {
   if (in.size() != out.size())
-    return {StatusCode::kInvalidArgument, std::string(name) + ": " + std::to_string(in.size()) + " " + items +
-                                              " but " + std::to_string(out.size()) + " " + slots};
+    return {StatusCode::kInvalidArgument, std::string(name) + ": " + std::to_string(in.size()) + " " + items + " but " +
+                                              std::to_string(out.size()) + " " + slots};
   if (Status s = validate(); !s.ok()) return s;
   return guard_status(name, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), grain), [&](const tbb::blocked_range<size_t>& range) {
@@ -32,7 +32,8 @@ Status parallel_map(const char* name, const char* items, const char* slots, std:
 
 Status validate_request(const QueryRequest& request, const ModelView* view) {
   if (request.taylor.order < 0 || request.taylor.order > 2)
-    return {StatusCode::kInvalidArgument, "Taylor order must be 0, 1 or 2, got " + std::to_string(request.taylor.order)};
+    return {StatusCode::kInvalidArgument,
+            "Taylor order must be 0, 1 or 2, got " + std::to_string(request.taylor.order)};
   if (!(request.taylor.beta > 0.0f) || !(request.taylor.beta < kInfinity))
     return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
   if (!std::isfinite(request.level)) return {StatusCode::kInvalidArgument, "level w* must be a finite number"};
@@ -76,8 +77,8 @@ Status validate_trace_options(const TraceOptions& options) {
   return Status::Ok();
 }
 
-Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits, std::atomic<size_t>* progress) {
+Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options, std::span<RayHit> hits,
+                  std::atomic<size_t>* progress) {
   const ModelView view = model_view(model);
   // Rays cost far more than points (and vary more), so chunks are smaller.
   return parallel_map(

@@ -12,7 +12,7 @@ namespace gwnrt {
 inline void append(std::string& s, std::string_view v) { s.append(v); }
 
 template <class T>
-  requires std::is_integral_v<T>
+requires std::is_integral_v<T>
 inline void append(std::string& s, T v) {
   char buf[24];
   s.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);

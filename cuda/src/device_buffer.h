@@ -23,9 +23,18 @@ class DeviceBuffer {
   DeviceBuffer() = default;
   DeviceBuffer(const DeviceBuffer&) = delete;
   DeviceBuffer& operator=(const DeviceBuffer&) = delete;
-  DeviceBuffer(DeviceBuffer&& o) noexcept : ptr_(o.ptr_), size_(o.size_) { o.ptr_ = nullptr; o.size_ = 0; }
+  DeviceBuffer(DeviceBuffer&& o) noexcept : ptr_(o.ptr_), size_(o.size_) {
+    o.ptr_ = nullptr;
+    o.size_ = 0;
+  }
   DeviceBuffer& operator=(DeviceBuffer&& o) noexcept {
-    if (this != &o) { release(); ptr_ = o.ptr_; size_ = o.size_; o.ptr_ = nullptr; o.size_ = 0; }
+    if (this != &o) {
+      release();
+      ptr_ = o.ptr_;
+      size_ = o.size_;
+      o.ptr_ = nullptr;
+      o.size_ = 0;
+    }
     return *this;
   }
   ~DeviceBuffer() { release(); }
@@ -33,7 +42,10 @@ class DeviceBuffer {
   Status allocate(size_t count) {
     release();
     if (count == 0) return Status::Ok();
-    if (Status s = cuda_status(cudaMalloc(&ptr_, count * sizeof(T)), "cudaMalloc"); !s.ok()) { ptr_ = nullptr; return s; }
+    if (Status s = cuda_status(cudaMalloc(&ptr_, count * sizeof(T)), "cudaMalloc"); !s.ok()) {
+      ptr_ = nullptr;
+      return s;
+    }
     size_ = count;
     return Status::Ok();
   }

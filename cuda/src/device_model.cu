@@ -17,8 +17,9 @@ struct DeviceTriangleTree {
 
   // Uploads `tree` and points `view` (the host view of it) at the device copies.
   Status upload(const TriangleTree& tree, TriangleTreeView& view) {
-    for (Status s : {nodes.upload(tree.bvh.nodes), expansion.upload(tree.expansion), order1.upload(tree.order1),
-                     order2.upload(tree.order2), vertices.upload(tree.vertices), triangle_ids.upload(tree.triangle_ids)})
+    for (Status s :
+         {nodes.upload(tree.bvh.nodes), expansion.upload(tree.expansion), order1.upload(tree.order1),
+          order2.upload(tree.order2), vertices.upload(tree.vertices), triangle_ids.upload(tree.triangle_ids)})
       if (!s.ok()) return s;
     view.bvh.nodes = nodes.get();
     view.expansion = expansion.get();
@@ -49,8 +50,9 @@ bool device_available(std::string* why) {
   int count = 0;
   const cudaError_t err = cudaGetDeviceCount(&count);
   if (err != cudaSuccess || count == 0) {
-    if (why) *why = err != cudaSuccess ? std::string("no usable CUDA device: ") + cudaGetErrorString(err)
-                                       : std::string("no CUDA device found");
+    if (why)
+      *why = err != cudaSuccess ? std::string("no usable CUDA device: ") + cudaGetErrorString(err)
+                                : std::string("no CUDA device found");
     cudaGetLastError();  // clear the sticky error so later calls start clean
     return false;
   }
@@ -66,32 +68,31 @@ ModelView DeviceModel::view() const { return buffers_ ? buffers_->view : ModelVi
 
 Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   return guard_status("DeviceModel::upload", [&]() -> Status {
-  std::string why;
-  if (!device_available(&why)) return {StatusCode::kUnavailable, why};
-  auto b = std::make_unique<Buffers>();
-  // Same views as on the host (counts, bounds), with device pointers in place of host ones.
-  ModelView v = model.view();
-  if (Status s = b->triangles.upload(model.triangle_tree(), v.triangles); !s.ok()) return s;
-  if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
-  if (Status s = b->sheets.upload(model.sheet_tree(), v.sheets); !s.ok()) return s;
-  const SegmentTree& st = model.boundary_tree();
-  const std::span<const WideNodeLength> lengths = model.cone_boundary_lengths();
-  const std::span<const ConeSegment> segments = model.cone_segments();
-  for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()),
-                   b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
-                   b->endpoints.upload(st.endpoints),
-                   b->segment_ids.upload(st.segment_ids),
-                   b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
-    if (!s.ok()) return s;
-  v.smooth_regions = b->smooth_regions.get();
-  v.cone_boundary_lengths = b->cone_lengths.get();
-  v.cone_segments = b->cone_segments.get();
-  v.boundary.bvh.nodes = b->segment_nodes.get();
-  v.boundary.endpoints = b->endpoints.get();
-  v.boundary.segment_ids = b->segment_ids.get();
-  b->view = v;
-  out.buffers_ = std::move(b);
-  return Status::Ok();
+    std::string why;
+    if (!device_available(&why)) return {StatusCode::kUnavailable, why};
+    auto b = std::make_unique<Buffers>();
+    // Same views as on the host (counts, bounds), with device pointers in place of host ones.
+    ModelView v = model.view();
+    if (Status s = b->triangles.upload(model.triangle_tree(), v.triangles); !s.ok()) return s;
+    if (Status s = b->cone.upload(model.cone_tree(), v.cone); !s.ok()) return s;
+    if (Status s = b->sheets.upload(model.sheet_tree(), v.sheets); !s.ok()) return s;
+    const SegmentTree& st = model.boundary_tree();
+    const std::span<const WideNodeLength> lengths = model.cone_boundary_lengths();
+    const std::span<const ConeSegment> segments = model.cone_segments();
+    for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()),
+                     b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
+                     b->endpoints.upload(st.endpoints), b->segment_ids.upload(st.segment_ids),
+                     b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
+      if (!s.ok()) return s;
+    v.smooth_regions = b->smooth_regions.get();
+    v.cone_boundary_lengths = b->cone_lengths.get();
+    v.cone_segments = b->cone_segments.get();
+    v.boundary.bvh.nodes = b->segment_nodes.get();
+    v.boundary.endpoints = b->endpoints.get();
+    v.boundary.segment_ids = b->segment_ids.get();
+    b->view = v;
+    out.buffers_ = std::move(b);
+    return Status::Ok();
   });
 }
 

@@ -36,7 +36,8 @@ Status map_on_device(std::span<const In> in, std::span<Out> out, int block, Fn f
 template <class In, class Out, class Validate, class Fn>
 Status map_batch_on_device(const char* name, const ModelView& model, std::span<const In> in, std::span<Out> out,
                            int block, Validate validate, Fn fn) {
-  if (in.size() != out.size()) return {StatusCode::kInvalidArgument, std::string(name) + ": inputs and outputs differ in size"};
+  if (in.size() != out.size())
+    return {StatusCode::kInvalidArgument, std::string(name) + ": inputs and outputs differ in size"};
   if (Status s = validate(); !s.ok()) return s;
   if (in.empty()) return Status::Ok();
   if (!model.triangles.bvh.nodes) return {StatusCode::kInvalidArgument, std::string(name) + ": model not uploaded"};

@@ -1,7 +1,7 @@
 // Batch queries on the GPU: one thread per point, each running the core's evaluate_point.
-#include "map_on_device.cuh"
 #include "gwnrt/cuda.h"
 #include "gwnrt/sdf/point_query.h"
+#include "map_on_device.cuh"
 
 namespace gwnrt::cuda {
 namespace {

@@ -1,8 +1,8 @@
 // Ray tracing on the GPU: one thread per ray, each running the core's trace_surface.
-#include "map_on_device.cuh"
 #include "gwnrt/batch.h"
 #include "gwnrt/cuda.h"
 #include "gwnrt/trace/surface_trace.h"
+#include "map_on_device.cuh"
 
 namespace gwnrt::cuda {
 namespace {

@@ -11,9 +11,9 @@
 #include <CLI/CLI.hpp>
 
 #include "gwnrt/batch.h"
-#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
 #include "point_mix.h"
 #include "program.h"
 
@@ -54,7 +54,8 @@ int main(int argc, char** argv) {
   app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: the bundled bunny with holes)");
   app.add_option("--points", count, "number of query points")->check(CLI::PositiveNumber);
   app.add_option("--beta", beta, "accuracy scale")->check(CLI::PositiveNumber);
-  app.add_option("--brute-seconds", brute_seconds, "time budget of the brute-force baseline")->check(CLI::PositiveNumber);
+  app.add_option("--brute-seconds", brute_seconds, "time budget of the brute-force baseline")
+      ->check(CLI::PositiveNumber);
   app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "random seed of the point mix");
   CLI11_PARSE(app, argc, argv);
@@ -80,8 +81,9 @@ int main(int argc, char** argv) {
   std::printf("tree + moments  %.3f s   (%zu nodes, depth %u)\n", model.timings().tree_seconds,
               model.triangle_tree().bvh.nodes.size(), model.triangle_tree().bvh.depth);
   std::printf("boundary + tree %.3f s\n", model.timings().boundary_seconds);
-  std::printf("sheets          %.3f s   (%u of %zu triangles are sheets for w* = %g)\n\n", model.timings().sheet_seconds,
-              model.sheet_tree().view().triangle_count, tris, double(model.sheet_level()));
+  std::printf("sheets          %.3f s   (%u of %zu triangles are sheets for w* = %g)\n\n",
+              model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, tris,
+              double(model.sheet_level()));
 
   const std::vector<vec3> points = point_mix(box, count, seed);
   std::vector<PointResult> results, reference;
@@ -95,7 +97,8 @@ int main(int argc, char** argv) {
     std::vector<vec3> subset(points.begin(), points.begin() + std::min(brute_count, points.size()));
     brute_sec = time_batch(model, subset, brute, reference);
     if (brute_sec > 0.25 * brute_seconds || subset.size() == points.size()) break;
-    brute_count = std::min(points.size(), brute_count * std::max<size_t>(2, size_t(0.5 * brute_seconds / std::max(brute_sec, 1e-3))));
+    brute_count = std::min(points.size(),
+                           brute_count * std::max<size_t>(2, size_t(0.5 * brute_seconds / std::max(brute_sec, 1e-3))));
   }
   const size_t brute_n = reference.size();
   std::vector<Row> rows;
@@ -134,7 +137,8 @@ int main(int argc, char** argv) {
   const double base = rows[0].rate();
   std::printf("%-30s %10s %14s %12s %14s\n", "mode", "points", "queries/s", "x brute", "max |dw|");
   for (size_t i = 0; i < rows.size(); ++i) {
-    std::printf("%-30s %10zu %14.4g %12.4g", rows[i].mode.c_str(), rows[i].points, rows[i].rate(), rows[i].rate() / base);
+    std::printf("%-30s %10zu %14.4g %12.4g", rows[i].mode.c_str(), rows[i].points, rows[i].rate(),
+                rows[i].rate() / base);
     if (i > 0 && !std::isnan(max_err[i - 1])) std::printf(" %14.3g", max_err[i - 1]);
     std::printf("\n");
   }

@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
+#include <CLI/CLI.hpp>
 
 #include "brute_force_trace.h"
 #include "camera.h"
@@ -39,9 +39,9 @@
 #include "embree_triangles.h"
 #endif
 #include "gwnrt/batch.h"
-#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
 #include "load_model.h"
 #include "program.h"
 
@@ -53,12 +53,14 @@ using examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-bench-trace";
 
-
 const char* kind_name(HitKind kind) {
   switch (kind) {
-    case HitKind::kSheet: return "sheet";
-    case HitKind::kSmooth: return "smooth";
-    default: return "none";
+    case HitKind::kSheet:
+      return "sheet";
+    case HitKind::kSmooth:
+      return "smooth";
+    default:
+      return "none";
   }
 }
 
@@ -200,10 +202,11 @@ void compare_with_brute(const char* label, const std::vector<Ray>& rays, const s
       worst = m;
     }
   }
-  std::printf("   %s (%zu rays): hit/miss agree %zu (%.2f%%); only c hits %zu, only b hits %zu; both hit %zu, "
-              "same kind %zu, max |dt|/diag %.3g, > 1e-4: %zu; c steps/ray %.1f, c capped %zu\n",
-              label, n, agree, 100.0 * double(agree) / double(n), c_only, b_only, both, kinds, max_dt, far,
-              c_steps / double(n), c_capped);
+  std::printf(
+      "   %s (%zu rays): hit/miss agree %zu (%.2f%%); only c hits %zu, only b hits %zu; both hit %zu, "
+      "same kind %zu, max |dt|/diag %.3g, > 1e-4: %zu; c steps/ray %.1f, c capped %zu\n",
+      label, n, agree, 100.0 * double(agree) / double(n), c_only, b_only, both, kinds, max_dt, far, c_steps / double(n),
+      c_capped);
   const auto describe = [&](size_t m) {
     const size_t i = pixels[m];
     std::printf("     c: %s t = %.9g (steps %u, capped %d); b: %s t = %.9g (steps %u, crossings %u, capped %d)\n",
@@ -261,8 +264,8 @@ int main(int argc, char** argv) {
 
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
-  std::printf("%s: %dx%d rays per mesh, %d threads, level %g, eps %g (of the box diagonal), beta %g\n", kProgram,
-              width, height, workers, options.level, options.epsilon, options.beta);
+  std::printf("%s: %dx%d rays per mesh, %d threads, level %g, eps %g (of the box diagonal), beta %g\n", kProgram, width,
+              height, workers, options.level, options.epsilon, options.beta);
 #if !defined(GWNRT_HAVE_EMBREE)
   std::printf("(built without Embree: column (a) is empty)\n");
 #endif
@@ -344,8 +347,7 @@ int main(int argc, char** argv) {
     row("(a) Embree rtcIntersect1", sum.a, "");
 #endif
     row("(b) gwnrt trace_rays", sum.b, "");
-    row("(c) brute-force Harnack", sum.c,
-        brute_done < subset.size() ? "   (cut short by --brute-seconds)" : "");
+    row("(c) brute-force Harnack", sum.c, brute_done < subset.size() ? "   (cut short by --brute-seconds)" : "");
     row("(b) gwnrt on (c)'s rays", sum.b_subset, "");
     std::printf("   b/a = %s   b/c = %s   (b on c's rays)/c = %s\n",
                 fmt_rate(sum.b.per_second() / sum.a.per_second()).c_str(),
@@ -365,10 +367,11 @@ int main(int argc, char** argv) {
       crossings += h.crossings;
       max_steps = std::max(max_steps, h.steps);
     }
-    std::printf("   gwnrt: hits %zu (sheet %zu, smooth %zu) of %zu; steps/ray %.3f (max %u), crossings/ray %.3f; "
-                "capped %zu, invalid %zu\n",
-                g_sheet + g_smooth, g_sheet, g_smooth, ghits.size(), steps / double(ghits.size()), max_steps,
-                crossings / double(ghits.size()), g_capped, g_invalid);
+    std::printf(
+        "   gwnrt: hits %zu (sheet %zu, smooth %zu) of %zu; steps/ray %.3f (max %u), crossings/ray %.3f; "
+        "capped %zu, invalid %zu\n",
+        g_sheet + g_smooth, g_sheet, g_smooth, ghits.size(), steps / double(ghits.size()), max_steps,
+        crossings / double(ghits.size()), g_capped, g_invalid);
     {
       // Where the Harnack steps go: their distribution over the rays that take any.
       std::vector<uint32_t> stepped;
@@ -376,13 +379,16 @@ int main(int argc, char** argv) {
         if (h.steps > 0) stepped.push_back(h.steps);
       if (!stepped.empty()) {
         std::sort(stepped.begin(), stepped.end());
-        const auto pct = [&](double q) { return stepped[std::min(stepped.size() - 1, size_t(q * double(stepped.size())))]; };
+        const auto pct = [&](double q) {
+          return stepped[std::min(stepped.size() - 1, size_t(q * double(stepped.size())))];
+        };
         const size_t top = std::max<size_t>(1, stepped.size() / 100);
         double top_steps = 0;
         for (size_t j = stepped.size() - top; j < stepped.size(); ++j) top_steps += stepped[j];
-        std::printf("   gwnrt rays with Harnack steps: %zu; steps p50 %u, p90 %u, p99 %u; the top 1%% of them take %.1f%% "
-                    "of all steps\n",
-                    stepped.size(), pct(0.5), pct(0.9), pct(0.99), 100.0 * top_steps / steps);
+        std::printf(
+            "   gwnrt rays with Harnack steps: %zu; steps p50 %u, p90 %u, p99 %u; the top 1%% of them take %.1f%% "
+            "of all steps\n",
+            stepped.size(), pct(0.5), pct(0.9), pct(0.99), 100.0 * top_steps / steps);
       }
     }
     for (size_t i = 0, shown = 0; i < ghits.size() && shown < size_t(show); ++i)
@@ -423,9 +429,10 @@ int main(int argc, char** argv) {
       }
       std::printf("   a vs b (all %zu rays): hit/miss agree %zu (%.3f%%); only a hits %zu, only b hits %zu\n",
                   rays.size(), agree, 100.0 * double(agree) / double(rays.size()), a_only, b_only);
-      std::printf("     both hit %zu: b sheet %zu, max |dt|/diag %.3g, of them off a's first triangle (> 1e-4) %zu; "
-                  "b smooth %zu (of b's %zu smooth hits); max |dt|/diag over all both-hit %.3g\n",
-                  both, sheet_both, max_dt_sheet, sheet_off, smooth_where_a, g_smooth, max_dt_all);
+      std::printf(
+          "     both hit %zu: b sheet %zu, max |dt|/diag %.3g, of them off a's first triangle (> 1e-4) %zu; "
+          "b smooth %zu (of b's %zu smooth hits); max |dt|/diag over all both-hit %.3g\n",
+          both, sheet_both, max_dt_sheet, sheet_off, smooth_where_a, g_smooth, max_dt_all);
       if (worst_sheet != SIZE_MAX && max_dt_sheet > 1e-4) {
         std::printf("     largest sheet |dt|: a t = %.9g, b t = %.9g (b steps %u, crossings %u)\n",
                     ehits[worst_sheet].t, ghits[worst_sheet].t, ghits[worst_sheet].steps, ghits[worst_sheet].crossings);

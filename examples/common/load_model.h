@@ -6,8 +6,8 @@
 #include <utility>
 
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
 
 namespace gwnrt::examples {
 

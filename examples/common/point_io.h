@@ -3,8 +3,8 @@
 // would shift every later row of the output against its input.
 #pragma once
 
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -97,7 +97,8 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
     bool allowed = false;
     for (int c : counts) allowed = allowed || c == count;
     if (!allowed) {
-      return {StatusCode::kParseError, where() + "expected " + layout + ", found " + std::to_string(count) + " numbers"};
+      return {StatusCode::kParseError,
+              where() + "expected " + layout + ", found " + std::to_string(count) + " numbers"};
     }
     if (Status s = row(values, count, line_no); !s.ok()) return {s.code(), where() + s.message()};
   }
@@ -107,11 +108,12 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
 // Points: exactly three finite numbers per line.
 inline Status parse_points(std::string_view text, const std::string& source, std::vector<vec3>& points) {
   points.clear();
-  return parse_rows(text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
-                    [&](const float* v, int, size_t) {
-                      points.emplace_back(v[0], v[1], v[2]);
-                      return Status::Ok();
-                    });
+  return parse_rows(
+      text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
+      [&](const float* v, int, size_t) {
+        points.emplace_back(v[0], v[1], v[2]);
+        return Status::Ok();
+      });
 }
 
 // The whole of `path`, or of standard input when `path` is "-"; `source` becomes its name.

@@ -19,9 +19,7 @@ inline int fail(const char* program, const std::string& message) {
 }
 
 // The same where returning to main is not practical (deep inside a benchmark's setup).
-[[noreturn]] inline void die(const char* program, const std::string& message) {
-  std::exit(fail(program, message));
-}
+[[noreturn]] inline void die(const char* program, const std::string& message) { std::exit(fail(program, message)); }
 
 // Caps TBB's parallelism for as long as it lives; workers() is the cap in force (the core count
 // when threads is 0).

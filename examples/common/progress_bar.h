@@ -21,10 +21,14 @@ namespace gwnrt::examples {
 // 1234567 -> "1.2M": counts and rates in progress bars and summaries.
 inline std::string human_count(double n) {
   char buf[32];
-  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.1fG", n / 1e9);
-  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.1fM", n / 1e6);
-  else if (n >= 1e4) std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
-  else std::snprintf(buf, sizeof buf, "%.0f", n);
+  if (n >= 1e9)
+    std::snprintf(buf, sizeof buf, "%.1fG", n / 1e9);
+  else if (n >= 1e6)
+    std::snprintf(buf, sizeof buf, "%.1fM", n / 1e6);
+  else if (n >= 1e4)
+    std::snprintf(buf, sizeof buf, "%.1fk", n / 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f", n);
   return buf;
 }
 
@@ -70,13 +74,15 @@ class ProgressBar {
     while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_; })) draw();
   }
 
-
   static std::string duration(double seconds) {
     char buf[32];
     const long s = long(seconds + 0.5);
-    if (s >= 3600) std::snprintf(buf, sizeof buf, "%ldh%02ldm", s / 3600, (s / 60) % 60);
-    else if (s >= 60) std::snprintf(buf, sizeof buf, "%ldm%02lds", s / 60, s % 60);
-    else std::snprintf(buf, sizeof buf, "%lds", s);
+    if (s >= 3600)
+      std::snprintf(buf, sizeof buf, "%ldh%02ldm", s / 3600, (s / 60) % 60);
+    else if (s >= 60)
+      std::snprintf(buf, sizeof buf, "%ldm%02lds", s / 60, s % 60);
+    else
+      std::snprintf(buf, sizeof buf, "%lds", s);
     return buf;
   }
 

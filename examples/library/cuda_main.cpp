@@ -11,7 +11,8 @@ int main(int argc, char** argv) {
   const char* path = argc > 1 ? argv[1] : "bunny.obj";
   gwnrt::Mesh mesh;
   gwnrt::GwnModel model;
-  if (gwnrt::Status s = gwnrt::load_mesh(path, mesh); !s.ok()) return std::fprintf(stderr, "%s\n", s.message().c_str()), 1;
+  if (gwnrt::Status s = gwnrt::load_mesh(path, mesh); !s.ok())
+    return std::fprintf(stderr, "%s\n", s.message().c_str()), 1;
   if (gwnrt::Status s = gwnrt::GwnModel::build(std::move(mesh), model); !s.ok())
     return std::fprintf(stderr, "%s\n", s.message().c_str()), 1;
   std::string why;

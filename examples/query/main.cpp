@@ -17,12 +17,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include "csv_writer.h"
 #include "gwnrt/batch.h"
-#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/sdf/point_query.h"
-#include "csv_writer.h"
 #include "load_model.h"
 #include "point_io.h"
 #include "program.h"
@@ -35,10 +35,10 @@
 namespace {
 
 using gwnrt::PointResult;
+using gwnrt::vec3;
 using gwnrt::examples::CsvWriter;
 using gwnrt::examples::fail;
 using gwnrt::examples::seconds_since;
-using gwnrt::vec3;
 
 constexpr const char* kProgram = "gwnrt-query";
 
@@ -53,40 +53,68 @@ struct Field {
 
 const char* piece_name(gwnrt::DistancePiece piece) {
   switch (piece) {
-    case gwnrt::DistancePiece::kSheet: return "sheet";
-    case gwnrt::DistancePiece::kSmooth: return "smooth";
-    default: return "bound";
+    case gwnrt::DistancePiece::kSheet:
+      return "sheet";
+    case gwnrt::DistancePiece::kSmooth:
+      return "smooth";
+    default:
+      return "bound";
   }
 }
 
 const Field kFields[] = {
     {"w", gwnrt::kFieldW, {"w"}, [](CsvWriter& c, const PointResult& r) { c.field(r.w); }},
-    {"grad", gwnrt::kFieldGradient, {"gx", "gy", "gz"},
+    {"grad",
+     gwnrt::kFieldGradient,
+     {"gx", "gy", "gz"},
      [](CsvWriter& c, const PointResult& r) {
        for (int a = 0; a < 3; ++a) c.field(r.gradient[a]);
      }},
-    {"hess", gwnrt::kFieldHessian, {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"},
+    {"hess",
+     gwnrt::kFieldHessian,
+     {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"},
      [](CsvWriter& c, const PointResult& r) {
        for (float h : {r.hessian.xx, r.hessian.xy, r.hessian.xz, r.hessian.yy, r.hessian.yz, r.hessian.zz}) c.field(h);
      }},
-    {"udist", gwnrt::kFieldUnsignedDistance, {"udist"}, [](CsvWriter& c, const PointResult& r) { c.field(r.unsigned_distance); }},
-    {"bdist", gwnrt::kFieldBoundaryDistance, {"bdist"}, [](CsvWriter& c, const PointResult& r) { c.field(r.boundary_distance); }},
-    {"sdf", gwnrt::kFieldSignedDistance, {"sdf", "sdf_piece"},
+    {"udist",
+     gwnrt::kFieldUnsignedDistance,
+     {"udist"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.unsigned_distance); }},
+    {"bdist",
+     gwnrt::kFieldBoundaryDistance,
+     {"bdist"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.boundary_distance); }},
+    {"sdf",
+     gwnrt::kFieldSignedDistance,
+     {"sdf", "sdf_piece"},
      [](CsvWriter& c, const PointResult& r) {
        c.field(r.sdf.distance);
        c.field(piece_name(r.sdf.piece));
      }},
-    {"sdf1", gwnrt::kFieldPseudoDistance, {"sdf1"}, [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.first_order); }},
-    {"sdf2", gwnrt::kFieldPseudoDistance, {"sdf2"}, [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.second_order); }},
-    {"sheet_dist", gwnrt::kFieldSheetDistance, {"sheet_dist"},
+    {"sdf1",
+     gwnrt::kFieldPseudoDistance,
+     {"sdf1"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.first_order); }},
+    {"sdf2",
+     gwnrt::kFieldPseudoDistance,
+     {"sdf2"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.second_order); }},
+    {"sheet_dist",
+     gwnrt::kFieldSheetDistance,
+     {"sheet_dist"},
      [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.sheet_distance); }},
-    {"proj", gwnrt::kFieldProjection, {"proj_x", "proj_y", "proj_z", "proj_iters", "proj_converged"},
+    {"proj",
+     gwnrt::kFieldProjection,
+     {"proj_x", "proj_y", "proj_z", "proj_iters", "proj_converged"},
      [](CsvWriter& c, const PointResult& r) {
        for (int a = 0; a < 3; ++a) c.field(r.projection.point[a]);
        c.field(unsigned(r.projection.iterations));
        c.field(unsigned(r.projection.converged));
      }},
-    {"hbound", gwnrt::kFieldHarnackBound, {"hbound"}, [](CsvWriter& c, const PointResult& r) { c.field(r.harnack_bound); }},
+    {"hbound",
+     gwnrt::kFieldHarnackBound,
+     {"hbound"},
+     [](CsvWriter& c, const PointResult& r) { c.field(r.harnack_bound); }},
 };
 constexpr size_t kFieldsInAll = 5;  // w, grad, hess, udist, bdist
 
@@ -127,9 +155,10 @@ void write_csv(CsvWriter& csv, const std::vector<bool>& selected, const std::vec
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Evaluate the generalized winding number of a triangle mesh (OBJ/PLY) at points read from a text "
-               "file (one 'x y z' per line) and write CSV.",
-               kProgram};
+  CLI::App app{
+      "Evaluate the generalized winding number of a triangle mesh (OBJ/PLY) at points read from a text "
+      "file (one 'x y z' per line) and write CSV.",
+      kProgram};
 
   std::string mesh_path;
   std::string points_path;
@@ -152,7 +181,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Validator(
           [](std::string& name) {
-            return field_indices(name) ? std::string() : "unknown field '" + name + "' (valid: " + valid_field_list() + ")";
+            return field_indices(name) ? std::string()
+                                       : "unknown field '" + name + "' (valid: " + valid_field_list() + ")";
           },
           "FIELD"));
   app.add_option("--order", order, "Taylor expansion order of the tree approximation")
@@ -171,8 +201,9 @@ int main(int argc, char** argv) {
             return std::string();
           },
           "BETA > 0"));
-  app.add_flag("--exact", exact,
-               "Brute-force double-precision reference instead of the tree (w, grad, hess, sdf1, sdf2; the sdf's w too)");
+  app.add_flag(
+      "--exact", exact,
+      "Brute-force double-precision reference instead of the tree (w, grad, hess, sdf1, sdf2; the sdf's w too)");
   app.add_option("--level", level, "Level w*: S = boundary of {w > w*} (sdf, sdf1, sdf2, sheet_dist, proj, hbound)")
       ->capture_default_str()
       ->check(CLI::Validator(
@@ -194,7 +225,8 @@ int main(int argc, char** argv) {
   app.add_option("--device", device, "Where to evaluate")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
-  app.add_flag("-v,--verbose", verbose, "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");
+  app.add_flag("-v,--verbose", verbose,
+               "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");
 
   CLI11_PARSE(app, argc, argv);
 
@@ -229,8 +261,9 @@ int main(int argc, char** argv) {
   }
 #else
   if (use_cuda) {
-    return fail(kProgram, "--device cuda: this gwnrt-query was built without the CUDA backend "
-                          "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
+    return fail(kProgram,
+                "--device cuda: this gwnrt-query was built without the CUDA backend "
+                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
   }
 #endif
 

@@ -98,7 +98,7 @@ GgxValue ggx_eval(const Material& mat, const vec3& wo, const vec3& wi) {
   const float d = ggx_d(m, a2);
   const float ro = ggx_r(wo, a2), ri = ggx_r(wi, a2);
   const float vis_den = ro * wi.z + ri * wo.z;  // > 0
-  const float pdf_den = wo.z + ro;               // > 0
+  const float pdf_den = wo.z + ro;              // > 0
   if (!(d > 0.0f) || !(vis_den > 0.0f) || !is_finite(d)) return v;
   const Spectrum fr = schlick(mat.albedo, glm::dot(wo, m));
   v.f = fr * (d / (2.0f * vis_den));
@@ -133,9 +133,12 @@ vec3 sample_ggx_visible_normal(const vec3& wo, float alpha, float u1, float u2) 
 
 bool is_delta(const Material& m) {
   switch (m.kind) {
-    case MaterialKind::kConductor: return is_mirror(m);
-    case MaterialKind::kDielectric: return true;
-    default: return false;
+    case MaterialKind::kConductor:
+      return is_mirror(m);
+    case MaterialKind::kDielectric:
+      return true;
+    default:
+      return false;
   }
 }
 
@@ -161,7 +164,8 @@ Spectrum bsdf_eval(const Material& m, const vec3& wo, const vec3& wi) {
     case MaterialKind::kConductor:
       if (is_mirror(m)) return Spectrum(0.0f);
       return ggx_eval(m, wo, wi).f;
-    default: return Spectrum(0.0f);  // dielectric (delta), emissive
+    default:
+      return Spectrum(0.0f);  // dielectric (delta), emissive
   }
 }
 
@@ -173,7 +177,8 @@ float bsdf_pdf(const Material& m, const vec3& wo, const vec3& wi) {
     case MaterialKind::kConductor:
       if (is_mirror(m)) return 0.0f;
       return ggx_eval(m, wo, wi).pdf;
-    default: return 0.0f;
+    default:
+      return 0.0f;
   }
 }
 
@@ -248,7 +253,8 @@ bool bsdf_sample(const Material& m, const vec3& wo, float u0, float u1, float u2
       out.weight = Spectrum(eta * eta);
       return true;
     }
-    default: return false;  // emissive: reflects nothing
+    default:
+      return false;  // emissive: reflects nothing
   }
 }
 

@@ -69,7 +69,7 @@ struct Sun {
   bool enabled() const { return radiance.x > 0.0f || radiance.y > 0.0f || radiance.z > 0.0f; }
   // A direction inside the disc, uniform in solid angle (pdf = 1 / cone solid angle).
   vec3 sample(float u0, float u1, float& pdf) const;
-  float pdf(const vec3& direction) const;     // 1 / cone solid angle inside, else 0
+  float pdf(const vec3& direction) const;                 // 1 / cone solid angle inside, else 0
   Spectrum radiance_toward(const vec3& direction) const;  // radiance inside the disc, else 0
 };
 

@@ -45,15 +45,16 @@ std::optional<std::string> check_finite(const char* option, double value) {
 // long render is never thrown away at the end.
 std::optional<std::string> check_output_path(const char* option, const std::string& path, bool create_parent) {
   if (!gwnrt::render::image_format_for(path)) {
-    return std::string(option) + " " + path + ": unknown image extension (supported: " +
-           gwnrt::render::supported_image_extensions() + ")";
+    return std::string(option) + " " + path +
+           ": unknown image extension (supported: " + gwnrt::render::supported_image_extensions() + ")";
   }
   const fs::path parent = fs::path(path).parent_path();
   if (parent.empty()) return std::nullopt;
   std::error_code ec;
   if (create_parent) {
     fs::create_directories(parent, ec);
-    if (ec) return std::string(option) + " " + path + ": cannot create directory " + parent.string() + ": " + ec.message();
+    if (ec)
+      return std::string(option) + " " + path + ": cannot create directory " + parent.string() + ": " + ec.message();
   } else if (!fs::is_directory(parent, ec)) {
     return std::string(option) + " " + path + ": directory " + parent.string() + " does not exist";
   }
@@ -77,10 +78,11 @@ std::string command_line(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Path-trace a scene whose GWN objects (the surface S = boundary of {w > level} of a mesh) sit "
-               "beside ordinary triangle meshes in Embree, from a JSON scene file or, given a mesh, a default "
-               "scene; to PNG (sRGB) or EXR (linear).",
-               kProgram};
+  CLI::App app{
+      "Path-trace a scene whose GWN objects (the surface S = boundary of {w > level} of a mesh) sit "
+      "beside ordinary triangle meshes in Embree, from a JSON scene file or, given a mesh, a default "
+      "scene; to PNG (sRGB) or EXR (linear).",
+      kProgram};
 
   std::string mesh_path;
   std::string output_path;
@@ -129,9 +131,7 @@ int main(int argc, char** argv) {
   app.add_option("--elevation", elevation, "Camera height above the horizon, degrees in [-90, 90]")
       ->type_name("DEG")
       ->capture_default_str();
-  app.add_option("--fov", fov, "Vertical field of view, degrees in (0, 180)")
-      ->type_name("DEG")
-      ->capture_default_str();
+  app.add_option("--fov", fov, "Vertical field of view, degrees in (0, 180)")->type_name("DEG")->capture_default_str();
   app.add_option("--mode", mode_name,
                  "gwn: S = boundary of {w > level}, sheets and smooth pieces; solid-angle: the level set "
                  "{Omega = level mod 4 pi}, smooth pieces only")
@@ -206,7 +206,8 @@ int main(int argc, char** argv) {
     return gwnrt::render::run_path_job(job, description);
   }
 
-  if (fs::path(mesh_path).extension() == ".json") return fail("--integrator first-hit renders a mesh, not a scene file");
+  if (fs::path(mesh_path).extension() == ".json")
+    return fail("--integrator first-hit renders a mesh, not a scene file");
   gwnrt::render::FirstHitJob job;
   job.mesh = mesh_path;
   gwnrt::TraceOptions& trace = job.settings.trace;

@@ -63,8 +63,8 @@ Status RenderScene::build(const SceneDesc& desc) {
   if (!lights_.cdf.empty()) lights_.cdf.back() = 1.0f;
 
   for (const GwnObjectDesc& g : desc.gwn_objects) {
-    GWNRTMesh mesh = gwnrtNewMesh(&g.mesh.positions[0].x, g.mesh.positions.size(), &g.mesh.triangles[0].x,
-                                  g.mesh.triangles.size());
+    GWNRTMesh mesh =
+        gwnrtNewMesh(&g.mesh.positions[0].x, g.mesh.positions.size(), &g.mesh.triangles[0].x, g.mesh.triangles.size());
     if (!mesh) return {StatusCode::kInvalidMesh, g.source + ": " + gwnrtGetLastError()};
     gwn_meshes_.push_back(mesh);
     GWNRTOptions options;

@@ -21,14 +21,14 @@ struct SurfaceHit {
   vec3 normal{0.0f};  // unit, world space, geometric and outward (triangles: by their winding;
                       // GWN objects: from {w > level} toward {w < level}), not turned to the ray
   int material = 0;
-  bool gwn = false;   // on a GWN object (else a triangle mesh)
+  bool gwn = false;  // on a GWN object (else a triangle mesh)
 };
 
 // Emissive triangles, sampled by area.
 struct AreaLights {
-  std::vector<vec3> vertices;     // 3 per triangle, world space
-  std::vector<Spectrum> emission; // per triangle
-  std::vector<float> cdf;         // by area, last = 1
+  std::vector<vec3> vertices;      // 3 per triangle, world space
+  std::vector<Spectrum> emission;  // per triangle
+  std::vector<float> cdf;          // by area, last = 1
   float total_area = 0.0f;
   bool empty() const { return emission.empty(); }
 };
@@ -60,8 +60,8 @@ class RenderScene {
   struct TopGeometry {
     bool instance = false;
     int material = 0;
-    const Mesh* mesh = nullptr;       // triangle meshes: for their normals
-    glm::mat3 normal_matrix{1.0f};    // instances: object to world for normals (inverse transpose)
+    const Mesh* mesh = nullptr;     // triangle meshes: for their normals
+    glm::mat3 normal_matrix{1.0f};  // instances: object to world for normals (inverse transpose)
   };
 
   const SceneDesc* desc_ = nullptr;

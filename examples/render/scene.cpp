@@ -58,7 +58,8 @@ glm::mat4 transform(const json& j, const std::string& where) {
   if (j.contains("rotate")) {
     const json& r = j["rotate"];
     if (!r.is_array() || r.size() != 4) fail(where + "/rotate", "expected [axis_x, axis_y, axis_z, degrees]");
-    const vec3 axis(number(r[0], where + "/rotate/0"), number(r[1], where + "/rotate/1"), number(r[2], where + "/rotate/2"));
+    const vec3 axis(number(r[0], where + "/rotate/0"), number(r[1], where + "/rotate/1"),
+                    number(r[2], where + "/rotate/2"));
     if (!(glm::length(axis) > 0.0f)) fail(where + "/rotate", "the axis must not be zero");
     out = glm::rotate(out, glm::radians(number(r[3], where + "/rotate/3")), glm::normalize(axis));
   }
@@ -75,11 +76,16 @@ Material material(const json& j, const std::string& where) {
   if (!j.is_object() || !j.contains("type") || !j["type"].is_string()) fail(where, "expected {\"type\": ...}");
   const std::string type = j["type"].get<std::string>();
   Material m;
-  if (type == "diffuse") m.kind = MaterialKind::kDiffuse;
-  else if (type == "conductor") m.kind = MaterialKind::kConductor;
-  else if (type == "dielectric") m.kind = MaterialKind::kDielectric;
-  else if (type == "emissive") m.kind = MaterialKind::kEmissive;
-  else fail(where + "/type", "unknown material type \"" + type + "\" (diffuse, conductor, dielectric, emissive)");
+  if (type == "diffuse")
+    m.kind = MaterialKind::kDiffuse;
+  else if (type == "conductor")
+    m.kind = MaterialKind::kConductor;
+  else if (type == "dielectric")
+    m.kind = MaterialKind::kDielectric;
+  else if (type == "emissive")
+    m.kind = MaterialKind::kEmissive;
+  else
+    fail(where + "/type", "unknown material type \"" + type + "\" (diffuse, conductor, dielectric, emissive)");
   if (j.contains("albedo")) m.albedo = vector3(j["albedo"], where + "/albedo");
   if (j.contains("roughness")) m.roughness = number(j["roughness"], where + "/roughness");
   if (j.contains("ior")) m.ior = number(j["ior"], where + "/ior");
@@ -188,20 +194,25 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     d.mesh = read_mesh(d.source, base, where + "/file");
     if (e.contains("mode")) {
       const std::string mode = e["mode"].is_string() ? e["mode"].get<std::string>() : "";
-      if (mode == "gwn") d.options.mode = TraceMode::kWindingNumber;
-      else if (mode == "solid-angle") d.options.mode = TraceMode::kSolidAngle;
-      else fail(where + "/mode", "expected \"gwn\" or \"solid-angle\"");
+      if (mode == "gwn")
+        d.options.mode = TraceMode::kWindingNumber;
+      else if (mode == "solid-angle")
+        d.options.mode = TraceMode::kSolidAngle;
+      else
+        fail(where + "/mode", "expected \"gwn\" or \"solid-angle\"");
     }
     if (e.contains("level")) d.options.level = number(e["level"], where + "/level");
     if (e.contains("epsilon")) d.options.epsilon = number(e["epsilon"], where + "/epsilon");
-    if (e.contains("max_steps")) d.options.max_steps = uint32_t(integer(e["max_steps"], where + "/max_steps", 1, 1 << 30));
+    if (e.contains("max_steps"))
+      d.options.max_steps = uint32_t(integer(e["max_steps"], where + "/max_steps", 1, 1 << 30));
     if (e.contains("beta")) d.options.beta = number(e["beta"], where + "/beta");
     if (e.contains("instances")) {
       if (!e["instances"].is_array()) fail(where + "/instances", "expected an array of transforms");
       for (size_t k = 0; k < e["instances"].size(); ++k)
         d.instances.push_back(transform(e["instances"][k], where + "/instances/" + std::to_string(k)));
     } else {
-      d.instances.push_back(e.contains("transform") ? transform(e["transform"], where + "/transform") : glm::mat4(1.0f));
+      d.instances.push_back(e.contains("transform") ? transform(e["transform"], where + "/transform")
+                                                    : glm::mat4(1.0f));
     }
     d.material = e.contains("material") ? material_index(e["material"], where + "/material", s) : 0;
     s.gwn_objects.push_back(std::move(d));
@@ -225,7 +236,8 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     }
     if (e.contains("radiance")) s.sun.radiance = vector3(e["radiance"], "/sun/radiance");
     if (e.contains("angular_radius")) s.sun.angular_radius = number(e["angular_radius"], "/sun/angular_radius");
-    if (!(s.sun.angular_radius > 0.0f && s.sun.angular_radius < 1.0f)) fail("/sun/angular_radius", "must lie in (0, 1) radians");
+    if (!(s.sun.angular_radius > 0.0f && s.sun.angular_radius < 1.0f))
+      fail("/sun/angular_radius", "must lie in (0, 1) radians");
   }
   for (const GwnObjectDesc& g : s.gwn_objects)
     if (Status st = validate_trace_options(g.options); !st.ok()) fail("/gwn_objects", st.message());

@@ -52,15 +52,15 @@ struct MeshDesc {
 
 struct GwnObjectDesc {
   std::string source;
-  Mesh mesh;                        // object space
+  Mesh mesh;  // object space
   TraceOptions options;
-  std::vector<glm::mat4> instances; // object to world, affine
+  std::vector<glm::mat4> instances;  // object to world, affine
   int material = 0;
 };
 
 struct EnvironmentDesc {
-  std::string file;           // empty: constant
-  Spectrum radiance{0.0f};    // constant radiance, or the image's scale in .x
+  std::string file;         // empty: constant
+  Spectrum radiance{0.0f};  // constant radiance, or the image's scale in .x
   float scale = 1.0f;
 };
 

@@ -30,9 +30,9 @@
 
 #include "exact_distance.h"
 #include "gwnrt/batch.h"
-#include "gwnrt/sdf/sheets.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/sdf/sheets.h"
 #include "kd_tree.h"
 #include "load_model.h"
 #include "parallel_over.h"

@@ -15,10 +15,10 @@
 #include <CLI/CLI.hpp>
 
 #include "csv_writer.h"
-#include "load_model.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "load_model.h"
 #include "point_io.h"
 #include "program.h"
 #include "progress_bar.h"
@@ -67,9 +67,12 @@ Status read_rays(const std::string& path, std::vector<Ray>& rays) {
 
 const char* kind_name(gwnrt::HitKind kind) {
   switch (kind) {
-    case gwnrt::HitKind::kSheet: return "sheet";
-    case gwnrt::HitKind::kSmooth: return "smooth";
-    default: return "none";
+    case gwnrt::HitKind::kSheet:
+      return "sheet";
+    case gwnrt::HitKind::kSmooth:
+      return "smooth";
+    default:
+      return "none";
   }
 }
 
@@ -99,9 +102,10 @@ void write_csv(CsvWriter& csv, const std::vector<RayHit>& hits) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Trace rays against the generalized-winding-number surface S = boundary of {w > level} of a "
-               "triangle mesh (OBJ/PLY), or against a level set of its solid angle, and write the first hits as CSV.",
-               kProgram};
+  CLI::App app{
+      "Trace rays against the generalized-winding-number surface S = boundary of {w > level} of a "
+      "triangle mesh (OBJ/PLY), or against a level set of its solid angle, and write the first hits as CSV.",
+      kProgram};
 
   std::string mesh_path, rays_path, output_path = "-", mode = "gwn", device = "cpu";
   std::optional<double> level;
@@ -115,8 +119,9 @@ int main(int argc, char** argv) {
   app.add_option("--mode", mode, "gwn: S = boundary of {w > level}; solid-angle: {Omega = level mod 4pi}")
       ->capture_default_str()
       ->check(CLI::IsMember({"gwn", "solid-angle"}));
-  app.add_option("--level", level, "Target level: a value of w (gwn, default 0.5) or an angle in radians (solid-angle, "
-                                   "default 2pi)");
+  app.add_option("--level", level,
+                 "Target level: a value of w (gwn, default 0.5) or an angle in radians (solid-angle, "
+                 "default 2pi)");
   app.add_option("--eps", options.epsilon, "Stopping distance, relative to the mesh's box diagonal")
       ->capture_default_str();
   app.add_option("--max-steps", options.max_steps, "Harnack steps allowed per ray (capped rays are reported)")
@@ -142,8 +147,9 @@ int main(int argc, char** argv) {
   }
 #else
   if (use_cuda)
-    return fail(kProgram, "--device cuda: this gwnrt-trace was built without the CUDA backend "
-                          "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
+    return fail(kProgram,
+                "--device cuda: this gwnrt-trace was built without the CUDA backend "
+                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
 #endif
 
   const gwnrt::examples::ThreadLimit thread_limit(threads);
@@ -157,7 +163,8 @@ int main(int argc, char** argv) {
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),
-                 model.boundary().segment_count() ? "" : " (closed: no Harnack steps)", loaded.load_seconds + loaded.build_seconds);
+                 model.boundary().segment_count() ? "" : " (closed: no Harnack steps)",
+                 loaded.load_seconds + loaded.build_seconds);
 
   std::vector<RayHit> hits(rays.size());
   const auto t_trace = std::chrono::steady_clock::now();
@@ -192,8 +199,10 @@ int main(int argc, char** argv) {
                  rays.empty() ? 0.0 : double(steps) / double(rays.size()));
   // Always said, terminal or not: a capped ray is a miss that may be wrong.
   if (capped)
-    std::fprintf(stderr, "%s: warning: %zu rays reached the step or crossing cap (column 'capped'); "
-                 "raise --max-steps or --eps\n", kProgram, capped);
+    std::fprintf(stderr,
+                 "%s: warning: %zu rays reached the step or crossing cap (column 'capped'); "
+                 "raise --max-steps or --eps\n",
+                 kProgram, capped);
 
   const bool to_stdout = output_path == "-";
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");

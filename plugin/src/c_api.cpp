@@ -18,7 +18,6 @@
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/trace/surface_trace.h"
 
-
 namespace {
 
 using namespace gwnrt;
@@ -96,32 +95,32 @@ extern "C" {
 
 GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* triangles, size_t triangleCount) {
   return guard_c_api("gwnrtNewMesh", GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
-  if ((vertexCount > 0 && !xyz) || (triangleCount > 0 && !triangles)) {
-    set_error("gwnrtNewMesh: NULL vertex or triangle array");
-    return nullptr;
-  }
-  Mesh mesh;
-  mesh.positions.resize(vertexCount);
-  for (size_t i = 0; i < vertexCount; ++i) mesh.positions[i] = vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
-  mesh.triangles.resize(triangleCount);
-  for (size_t t = 0; t < triangleCount; ++t)
-    mesh.triangles[t] = uvec3(triangles[3 * t], triangles[3 * t + 1], triangles[3 * t + 2]);
-  return build(std::move(mesh), "gwnrtNewMesh");
+    if ((vertexCount > 0 && !xyz) || (triangleCount > 0 && !triangles)) {
+      set_error("gwnrtNewMesh: NULL vertex or triangle array");
+      return nullptr;
+    }
+    Mesh mesh;
+    mesh.positions.resize(vertexCount);
+    for (size_t i = 0; i < vertexCount; ++i) mesh.positions[i] = vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    mesh.triangles.resize(triangleCount);
+    for (size_t t = 0; t < triangleCount; ++t)
+      mesh.triangles[t] = uvec3(triangles[3 * t], triangles[3 * t + 1], triangles[3 * t + 2]);
+    return build(std::move(mesh), "gwnrtNewMesh");
   });
 }
 
 GWNRTMesh gwnrtLoadMesh(const char* path) {
   return guard_c_api("gwnrtLoadMesh", GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
-  if (!path) {
-    set_error("gwnrtLoadMesh: NULL path");
-    return nullptr;
-  }
-  Mesh mesh;
-  if (Status s = load_mesh(path, mesh); !s.ok()) {
-    set_error(s.message());
-    return nullptr;
-  }
-  return build(std::move(mesh), path);
+    if (!path) {
+      set_error("gwnrtLoadMesh: NULL path");
+      return nullptr;
+    }
+    Mesh mesh;
+    if (Status s = load_mesh(path, mesh); !s.ok()) {
+      set_error(s.message());
+      return nullptr;
+    }
+    return build(std::move(mesh), path);
   });
 }
 
@@ -149,46 +148,46 @@ void gwnrtInitOptions(GWNRTOptions* options) {
 
 RTCGeometry gwnrtNewGeometry(RTCDevice device, GWNRTMesh mesh, const GWNRTOptions* options) {
   return guard_c_api("gwnrtNewGeometry", RTCGeometry(nullptr), [&]() -> RTCGeometry {
-  if (!device || !mesh) {
-    set_error(!device ? "gwnrtNewGeometry: NULL device" : "gwnrtNewGeometry: NULL mesh");
-    return nullptr;
-  }
-  GWNRTOptions o;
-  gwnrtInitOptions(&o);
-  if (options) {
-    // Read as the integer it is: a C caller may pass any int, and loading an out-of-range
-    // value as the enum would be undefined in C++.
-    int mode;
-    std::memcpy(&mode, &options->mode, sizeof mode);
-    if (mode != GWNRT_MODE_GWN && mode != GWNRT_MODE_SOLID_ANGLE) {
-      set_error("gwnrtNewGeometry: mode must be GWNRT_MODE_GWN or GWNRT_MODE_SOLID_ANGLE");
+    if (!device || !mesh) {
+      set_error(!device ? "gwnrtNewGeometry: NULL device" : "gwnrtNewGeometry: NULL mesh");
       return nullptr;
     }
-    o = *options;
-  }
-  const TraceOptions trace = trace_options(o);
-  if (Status s = validate_trace_options(trace); !s.ok()) {
-    set_error("gwnrtNewGeometry: " + s.message());
-    return nullptr;
-  }
-  Aabb bounds = surface_bounds(mesh->view, trace);
-  if (!bounds.valid()) bounds = mesh->model.bounds();  // S is empty: any box will do
-  // The record first: adding it is what may throw, and until it exists nothing is held. Should
-  // Embree then fail, the record keeps its reference until the process ends, as all records do.
-  GeometryRecord* record = RecordRegistry::add({mesh, trace, bounds});
-  gwnrtRetainMesh(mesh);
-  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-  if (!geometry) {
-    set_error("gwnrtNewGeometry: Embree could not create a user geometry (see the device's error)");
-    return nullptr;
-  }
-  rtcSetGeometryUserPrimitiveCount(geometry, 1);
-  rtcSetGeometryUserData(geometry, record);
-  embree_api::set_callbacks(geometry, bounds_callback, intersect_callback, occluded_callback);
-  // Committed, so that it can be attached as it is; an application that changes it later (mask,
-  // filters) commits it again, as any Embree geometry.
-  rtcCommitGeometry(geometry);
-  return geometry;
+    GWNRTOptions o;
+    gwnrtInitOptions(&o);
+    if (options) {
+      // Read as the integer it is: a C caller may pass any int, and loading an out-of-range
+      // value as the enum would be undefined in C++.
+      int mode;
+      std::memcpy(&mode, &options->mode, sizeof mode);
+      if (mode != GWNRT_MODE_GWN && mode != GWNRT_MODE_SOLID_ANGLE) {
+        set_error("gwnrtNewGeometry: mode must be GWNRT_MODE_GWN or GWNRT_MODE_SOLID_ANGLE");
+        return nullptr;
+      }
+      o = *options;
+    }
+    const TraceOptions trace = trace_options(o);
+    if (Status s = validate_trace_options(trace); !s.ok()) {
+      set_error("gwnrtNewGeometry: " + s.message());
+      return nullptr;
+    }
+    Aabb bounds = surface_bounds(mesh->view, trace);
+    if (!bounds.valid()) bounds = mesh->model.bounds();  // S is empty: any box will do
+    // The record first: adding it is what may throw, and until it exists nothing is held. Should
+    // Embree then fail, the record keeps its reference until the process ends, as all records do.
+    GeometryRecord* record = RecordRegistry::add({mesh, trace, bounds});
+    gwnrtRetainMesh(mesh);
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    if (!geometry) {
+      set_error("gwnrtNewGeometry: Embree could not create a user geometry (see the device's error)");
+      return nullptr;
+    }
+    rtcSetGeometryUserPrimitiveCount(geometry, 1);
+    rtcSetGeometryUserData(geometry, record);
+    embree_api::set_callbacks(geometry, bounds_callback, intersect_callback, occluded_callback);
+    // Committed, so that it can be attached as it is; an application that changes it later (mask,
+    // filters) commits it again, as any Embree geometry.
+    rtcCommitGeometry(geometry);
+    return geometry;
   });
 }
 

@@ -72,7 +72,8 @@ void copy_hit_lane(RTCHitN* to, RTCHitN* from, unsigned n, unsigned i) {
   RTCHitN_v(to, n, i) = RTCHitN_v(from, n, i);
   RTCHitN_primID(to, n, i) = RTCHitN_primID(from, n, i);
   RTCHitN_geomID(to, n, i) = RTCHitN_geomID(from, n, i);
-  for (unsigned l = 0; l < embree_api::kInstanceLevels; ++l) RTCHitN_instID(to, n, i, l) = RTCHitN_instID(from, n, i, l);
+  for (unsigned l = 0; l < embree_api::kInstanceLevels; ++l)
+    RTCHitN_instID(to, n, i, l) = RTCHitN_instID(from, n, i, l);
 }
 
 // Offers a candidate hit of lane i to the intersection (or occlusion) filters, with the ray's

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <string>
 
-#include "gwnrt/cuda.h"
 #include "../test_util.h"
+#include "gwnrt/cuda.h"
 
 namespace gwnrt {
 namespace {
@@ -75,7 +75,8 @@ TEST_P(CudaQueries, SignedDistanceMatchesTheCpuBackend) {
     } else {
       // Relative to the distance itself as well: far from S the smooth estimate is a ratio of
       // small numbers.
-      max_sdf = std::max(max_sdf, double(std::abs(c.sdf.distance - g.sdf.distance)) / (diag + std::abs(c.sdf.distance)));
+      max_sdf =
+          std::max(max_sdf, double(std::abs(c.sdf.distance - g.sdf.distance)) / (diag + std::abs(c.sdf.distance)));
     }
     EXPECT_EQ(std::signbit(c.sdf.distance), std::signbit(g.sdf.distance)) << "point " << i;
     if (c.projection.converged != g.projection.converged) {
@@ -85,9 +86,10 @@ TEST_P(CudaQueries, SignedDistanceMatchesTheCpuBackend) {
     }
     max_bound = std::max(max_bound, double(std::abs(c.harnack_bound - g.harnack_bound)) / (diag + c.harnack_bound));
   }
-  std::printf("[ %s ] sdf max rel. diff %.2g (pieces differ at %zu), projection %.2g (convergence differs at %zu), "
-              "Harnack bound %.2g\n",
-              GetParam(), max_sdf, piece_differs, max_projection, convergence_differs, max_bound);
+  std::printf(
+      "[ %s ] sdf max rel. diff %.2g (pieces differ at %zu), projection %.2g (convergence differs at %zu), "
+      "Harnack bound %.2g\n",
+      GetParam(), max_sdf, piece_differs, max_projection, convergence_differs, max_bound);
   EXPECT_LE(piece_differs, points.size() / 200);
   EXPECT_LE(convergence_differs, points.size() / 200);
   EXPECT_LT(max_sdf, 1e-4);

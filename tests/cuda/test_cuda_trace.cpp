@@ -8,9 +8,9 @@
 #include <cmath>
 #include <string>
 
+#include "../test_util.h"
 #include "camera.h"
 #include "gwnrt/cuda.h"
-#include "../test_util.h"
 
 namespace gwnrt {
 namespace {
@@ -77,12 +77,13 @@ TEST_P(CudaTrace, MatchesTheCpuBackend) {
     const double cosine = std::clamp(double(glm::dot(cpu[i].normal, gpu[i].normal)), -1.0, 1.0);
     max_angle = std::max(max_angle, std::acos(cosine));
   }
-  std::printf("[ %s ] %zu rays: %zu hit/miss disagreements, %zu both hit (%zu smooth); max |dt|: sheets %.3g diag, "
-              "smooth %.3g stopping distances (times the cosine); max normal angle %.3g rad\n",
-              GetParam().mesh, rays.size(), hit_disagree, both_hit, smooth, max_sheet_dt, max_smooth_dt, max_angle);
+  std::printf(
+      "[ %s ] %zu rays: %zu hit/miss disagreements, %zu both hit (%zu smooth); max |dt|: sheets %.3g diag, "
+      "smooth %.3g stopping distances (times the cosine); max normal angle %.3g rad\n",
+      GetParam().mesh, rays.size(), hit_disagree, both_hit, smooth, max_sheet_dt, max_smooth_dt, max_angle);
   EXPECT_LE(hit_disagree, rays.size() / 1000);
-  EXPECT_GT(both_hit, rays.size() / 50);                     // the comparison says something
-  EXPECT_LE(max_sheet_dt, 1e-6);                              // float round-off of one crossing
+  EXPECT_GT(both_hit, rays.size() / 50);  // the comparison says something
+  EXPECT_LE(max_sheet_dt, 1e-6);          // float round-off of one crossing
   EXPECT_LE(max_smooth_dt, 4.0);
   EXPECT_LE(max_angle, 1e-2);
 }

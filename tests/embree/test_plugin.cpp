@@ -22,12 +22,12 @@
 #include <vector>
 
 #include "../test_util.h"
-#include "first_crossing.h"
 #include "camera.h"
 #include "embree_ray.h"
 #include "embree_triangles.h"
-#include "gwnrt/field/distance.h"
+#include "first_crossing.h"
 #include "gwnrt/embree.h"
+#include "gwnrt/field/distance.h"
 #include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt {
@@ -348,7 +348,8 @@ std::vector<RTCRayHit> intersect_packets(RTCScene scene, std::vector<RTCRayHit> 
       rtcCopyHitToHitN(RTCRayHitN_HitN(rh, N), &lane.hit, N, k);
     }
     P::intersect(valid, scene, context ? context : local.get(), &packet);
-    for (unsigned k = 0; k < unsigned(N) && first + k < in.size(); ++k) in[first + k] = rtcGetRayHitFromRayHitN(rh, N, k);
+    for (unsigned k = 0; k < unsigned(N) && first + k < in.size(); ++k)
+      in[first + k] = rtcGetRayHitFromRayHitN(rh, N, k);
   }
   return in;
 }
@@ -504,15 +505,15 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
     size_t active = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
       if (!lanes(i) && !same_bits(triangles_out[i], inactive_lane(in[i]))) {
-        EXPECT_TRUE(same_bits(out[i], single[i])) << "rtcIntersect" << n << " inactive lane " << i
-                                                   << " traced by Embree as on its triangles\n"
-                                                   << describe(out[i]) << "\n"
-                                                   << describe(single[i]);
+        EXPECT_TRUE(same_bits(out[i], single[i]))
+            << "rtcIntersect" << n << " inactive lane " << i << " traced by Embree as on its triangles\n"
+            << describe(out[i]) << "\n"
+            << describe(single[i]);
       } else if (lanes(i)) {
         ++active;
         EXPECT_TRUE(same_bits(out[i], single[i])) << "rtcIntersect" << n << " lane " << i << "\n"
-                                                   << describe(out[i]) << "\n"
-                                                   << describe(single[i]);
+                                                  << describe(out[i]) << "\n"
+                                                  << describe(single[i]);
       } else {
         EXPECT_TRUE(same_bits(out[i], inactive_lane(in[i]))) << "rtcIntersect" << n << " touched inactive lane " << i;
       }
@@ -895,8 +896,8 @@ void record_filter(const RTCFilterFunctionNArguments* args) {
     if (args->valid[i] != -1) continue;
     const unsigned id = RTCRayN_id(args->ray, args->N, i);
     // Embree sets the ray's tfar to the candidate's t while the filter runs.
-    const Candidate c{RTCRayN_tfar(args->ray, args->N, i), RTCHitN_primID(args->hit, args->N, i),
-                      RTCHitN_u(args->hit, args->N, i),    RTCHitN_v(args->hit, args->N, i),
+    const Candidate c{RTCRayN_tfar(args->ray, args->N, i),   RTCHitN_primID(args->hit, args->N, i),
+                      RTCHitN_u(args->hit, args->N, i),      RTCHitN_v(args->hit, args->N, i),
                       RTCHitN_geomID(args->hit, args->N, i), RTCHitN_instID(args->hit, args->N, i, 0)};
     std::vector<Candidate>& seen = state->seen.at(id);
     seen.push_back(c);
@@ -966,11 +967,13 @@ void check_filters(bool as_context_filter) {
   size_t checked = 0, ambiguous_rays = 0, two_or_more = 0;
   std::vector<RTCRayHit> first_rejected(rays.size());
   state.reset(rays.size(), Policy::kRejectFirst);
-  for (size_t i = 0; i < rays.size(); ++i) first_rejected[i] = intersect1(gwn.get(), rays[i], &context.context, unsigned(i));
+  for (size_t i = 0; i < rays.size(); ++i)
+    first_rejected[i] = intersect1(gwn.get(), rays[i], &context.context, unsigned(i));
   const std::vector<std::vector<Candidate>> seen_first = state.seen;
   state.reset(rays.size(), Policy::kRejectAll);
   std::vector<RTCRayHit> all_rejected(rays.size());
-  for (size_t i = 0; i < rays.size(); ++i) all_rejected[i] = intersect1(gwn.get(), rays[i], &context.context, unsigned(i));
+  for (size_t i = 0; i < rays.size(); ++i)
+    all_rejected[i] = intersect1(gwn.get(), rays[i], &context.context, unsigned(i));
   const std::vector<std::vector<Candidate>> seen_all = state.seen;
 
   for (size_t i = 0; i < rays.size(); ++i) {
@@ -1187,7 +1190,9 @@ TEST(EmbreePlugin, ThreadsGiveIdenticalResults) {
 // 7. Bad input, errors, reference counting.
 // ---------------------------------------------------------------------------------------------
 
-bool mentions(const char* message, const std::string& what) { return std::string(message).find(what) != std::string::npos; }
+bool mentions(const char* message, const std::string& what) {
+  return std::string(message).find(what) != std::string::npos;
+}
 
 TEST(EmbreePlugin, BadMeshesAreRefusedWithAReason) {
   const float xyz[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -1286,8 +1291,7 @@ TEST(EmbreePlugin, InvalidRaysMissWithoutCrashing) {
   // with NaN is trace_surface's rejection, checked directly below.
   const vec3 inside(-0.5f, 4.0f, 0.0f);  // within both bunnies' boxes
   const std::vector<Ray> bad = {
-      Ray{inside, vec3(0.0f)},
-      Ray{vec3(0.0f), vec3(0.0f)},
+      Ray{inside, vec3(0.0f)}, Ray{vec3(0.0f), vec3(0.0f)},
       Ray{inside, vec3(1e-45f, 0.0f, 0.0f)},  // a denormal direction: |d|² underflows in float
   };
   std::vector<RTCRayHit> in;
@@ -1441,8 +1445,9 @@ TEST(EmbreePlugin, BoundsHoldSurfaceFarOutsideTheBox) {
   }
   EXPECT_GT(hits, rays.size() / 4);
   EXPECT_GT(far_hits, hits / 4) << "hits far (more than 0.3 diagonals) outside the mesh's box";
-  std::printf("[bounds] %zu rays missing the mesh's box: %zu hits, %zu more than 0.3 diagonals out; worst |dt|/t %.3g\n",
-              rays.size(), hits, far_hits, dt.value);
+  std::printf(
+      "[bounds] %zu rays missing the mesh's box: %zu hits, %zu more than 0.3 diagonals out; worst |dt|/t %.3g\n",
+      rays.size(), hits, far_hits, dt.value);
 }
 
 // The soup's hits, independently of the tracer: the exact w crosses 1/2 there, upward along the
@@ -1465,7 +1470,8 @@ TEST(EmbreePlugin, SoupHitsLieOnTheSurface) {
     const auto w = w_around(exact, r, h.ray.tfar, 1e-3 * diag);
     if (!crosses_half(w, true)) {
       ++off_surface;
-      ADD_FAILURE() << describe(r) << "\n" << describe(h) << "\nexact w " << w.first << " -> " << w.second
+      ADD_FAILURE() << describe(r) << "\n"
+                    << describe(h) << "\nexact w " << w.first << " -> " << w.second
                     << " around the hit: not a crossing of 1/2";
     }
   }

@@ -44,10 +44,10 @@
 #include <vector>
 
 #include "gwnrt/field/distance.h"
-#include "gwnrt/trace/harnack.h"
-#include "gwnrt/geometry/model_view.h"
-#include "gwnrt/trace/surface_trace.h"
 #include "gwnrt/field/winding_number.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/harnack.h"
+#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::reference {
 
@@ -65,12 +65,11 @@ class BruteForceTracer {
         if (less(b, a)) std::swap(a, b);
         edges.push_back({a, b});
       }
-    std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) {
-      return less(x.a, y.a) || (x.a == y.a && less(x.b, y.b));
-    });
-    edges.erase(std::unique(edges.begin(), edges.end(),
-                            [](const Edge& x, const Edge& y) { return x.a == y.a && x.b == y.b; }),
-                edges.end());
+    std::sort(edges.begin(), edges.end(),
+              [](const Edge& x, const Edge& y) { return less(x.a, y.a) || (x.a == y.a && less(x.b, y.b)); });
+    edges.erase(
+        std::unique(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.a == y.a && x.b == y.b; }),
+        edges.end());
     edges_.reserve(edges.size() * 2);
     for (const Edge& e : edges) {
       edges_.push_back(dvec3(e.a));
@@ -120,7 +119,9 @@ class BruteForceTracer {
     const float phase = o.level - std::floor(o.level);
     const double eps = double(o.epsilon) * glm::length(dvec3(model_.bounds.hi - model_.bounds.lo));
     const auto point = [&](double t) { return vec3(origin + t * dir); };
-    const auto band_at = [&](double t) { return std::floor(winding_number_exact(model_.triangles, point(t)).w - level); };
+    const auto band_at = [&](double t) {
+      return std::floor(winding_number_exact(model_.triangles, point(t)).w - level);
+    };
 
     double t = t0, t_prev = t0, rho_prev = 0;  // t_prev, rho_prev: the last accepted point and its safe step
     bool overstepped = false;

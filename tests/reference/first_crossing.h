@@ -75,9 +75,9 @@ struct ReferenceCrossing {
   bool hit = false;
   double s = std::numeric_limits<double>::infinity();  // along the unit direction
   double t = std::numeric_limits<double>::infinity();  // in units of the ray's direction
-  bool sheet = false;     // a triangle whose ±1 jump straddles the level (winding-number mode)
-  dvec3 gradient{0.0};    // ∇w at the crossing (smooth crossings)
-  double rate = 0;        // |dw/ds| there: how fast the ray crosses the level (infinite for sheets)
+  bool sheet = false;   // a triangle whose ±1 jump straddles the level (winding-number mode)
+  dvec3 gradient{0.0};  // ∇w at the crossing (smooth crossings)
+  double rate = 0;      // |dw/ds| there: how fast the ray crosses the level (infinite for sheets)
 };
 
 namespace detail {
@@ -139,9 +139,8 @@ inline ReferenceCrossing reference_crossing(const ReferenceMesh& r, const Refere
 
 // The whole reference in one call: the first point of S = ∂{w > level} (solid-angle mode: of
 // {w ≡ level mod 1}, smooth crossings only) along `ray` inside `box`, or none.
-inline ReferenceCrossing reference_first_crossing(const ReferenceMesh& r, const Ray& ray, double level,
-                                                  const Aabb& box, int samples,
-                                                  ReferenceMode mode = ReferenceMode::kWindingNumber) {
+inline ReferenceCrossing reference_first_crossing(const ReferenceMesh& r, const Ray& ray, double level, const Aabb& box,
+                                                  int samples, ReferenceMode mode = ReferenceMode::kWindingNumber) {
   return reference_crossing(r, reference_profile(r, ray, box, samples), level, mode);
 }
 

@@ -104,7 +104,6 @@ bool on_surface_band(const ExactLevel& e, const dvec3& y) {
   return std::fabs(winding_number_exact(e.mesh, vec3(y)).w - e.level) < kBandTolerance;
 }
 
-
 std::vector<CloudPoint> build_cloud(const GwnModel& model, const ExactLevel& exact, float level, size_t target,
                                     size_t max_lines, uint64_t seed, CloudStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();

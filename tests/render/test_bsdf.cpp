@@ -33,8 +33,7 @@ struct Rng {
 };
 
 vec3 spherical(double theta, double phi) {
-  return vec3(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
-              float(std::cos(theta)));
+  return vec3(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta)));
 }
 
 dvec3 to_d(const vec3& v) { return dvec3(v.x, v.y, v.z); }
@@ -147,7 +146,8 @@ struct HemiGrid {
   // weights (sin θ dθ dφ) of a cell's points summing to its solid angle.
   template <class Fn>
   void for_each_point(int q, Fn&& fn) const {
-    static const double kX[3][3] = {{0.0}, {-0.5773502691896258, 0.5773502691896258}, {-0.7745966692414834, 0.0, 0.7745966692414834}};
+    static const double kX[3][3] = {
+        {0.0}, {-0.5773502691896258, 0.5773502691896258}, {-0.7745966692414834, 0.0, 0.7745966692414834}};
     static const double kW[3][3] = {{2.0}, {1.0, 1.0}, {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0}};
     const int nt = theta.cells(), np = phi.cells();
     std::vector<double> cp(np * q), sp(np * q), wp(np * q);
@@ -160,7 +160,8 @@ struct HemiGrid {
       }
     }
     for (int i = 0; i < nt; ++i) {
-      const double mid = 0.5 * (theta.nodes[i] + theta.nodes[i + 1]), half = 0.5 * (theta.nodes[i + 1] - theta.nodes[i]);
+      const double mid = 0.5 * (theta.nodes[i] + theta.nodes[i + 1]),
+                   half = 0.5 * (theta.nodes[i + 1] - theta.nodes[i]);
       for (int a = 0; a < q; ++a) {
         const double th = mid + half * kX[q - 1][a];
         const double st = std::sin(th), ct = std::cos(th), wt = st * half * kW[q - 1][a];
@@ -230,8 +231,8 @@ std::vector<vec3> test_wos() {
 
 std::vector<Material> non_delta_materials() {
   const Spectrum f0(0.95f, 0.64f, 0.54f);  // copper-ish: exercises Schlick per channel
-  return {diffuse(Spectrum(0.8f, 0.5f, 0.2f)), conductor(f0, 0.1f), conductor(f0, 0.3f),
-          conductor(f0, 0.7f), conductor(f0, 1.0f)};
+  return {diffuse(Spectrum(0.8f, 0.5f, 0.2f)), conductor(f0, 0.1f), conductor(f0, 0.3f), conductor(f0, 0.7f),
+          conductor(f0, 1.0f)};
 }
 
 // For every non-delta material and several wo:
@@ -249,8 +250,7 @@ TEST(BsdfSampling, MatchesEvalPdfAndQuadrature) {
   double worst_pdf_rel = 0.0, worst_weight_rel = 0.0;
   for (const Material& m : non_delta_materials()) {
     for (const vec3& wo : test_wos()) {
-      SCOPED_TRACE(::testing::Message() << "kind " << int(m.kind) << " roughness " << m.roughness
-                                        << " wo_z " << wo.z);
+      SCOPED_TRACE(::testing::Message() << "kind " << int(m.kind) << " roughness " << m.roughness << " wo_z " << wo.z);
       const HemiGrid grid = grid_for(m, wo, kCells);
       const int nt = grid.theta.cells(), np = grid.phi.cells();
       const int nb = kBinsT * kBinsPhi;
@@ -290,9 +290,9 @@ TEST(BsdfSampling, MatchesEvalPdfAndQuadrature) {
         if (bs.delta || !(bs.wi.z > 0.0f) || std::abs(len - 1.0) > 1e-5 || !(bs.pdf > 0.0f) || prel > 1e-4 ||
             wrel > 1e-4) {
           if (++bad_samples <= 3)
-            ADD_FAILURE() << "sample " << s << ": wi (" << bs.wi.x << ", " << bs.wi.y << ", " << bs.wi.z
-                          << ") pdf " << bs.pdf << " vs bsdf_pdf " << pdf << ", weight " << bs.weight.x
-                          << " vs eval·cos/pdf " << expect_w.x << ", delta " << bs.delta;
+            ADD_FAILURE() << "sample " << s << ": wi (" << bs.wi.x << ", " << bs.wi.y << ", " << bs.wi.z << ") pdf "
+                          << bs.pdf << " vs bsdf_pdf " << pdf << ", weight " << bs.weight.x << " vs eval·cos/pdf "
+                          << expect_w.x << ", delta " << bs.delta;
         }
         sum += to_d(bs.weight);
         sum2 += to_d(bs.weight) * to_d(bs.weight);
@@ -318,7 +318,8 @@ TEST(BsdfSampling, MatchesEvalPdfAndQuadrature) {
       const double p_reject = expected[nb];
       const double f_reject = observed[nb] / kSamples;
       const double sigma = std::sqrt(std::max(p_reject * (1.0 - p_reject), 1e-12) / kSamples);
-      EXPECT_LE(std::abs(f_reject - p_reject), 5.0 * sigma + 5e-5) << "rejected " << f_reject << ", 1 − ∫pdf " << p_reject;
+      EXPECT_LE(std::abs(f_reject - p_reject), 5.0 * sigma + 5e-5)
+          << "rejected " << f_reject << ", 1 − ∫pdf " << p_reject;
       worst_reject_sigma = std::max(worst_reject_sigma, std::abs(f_reject - p_reject) / sigma);
 
       // (3) Chi-square: cells expecting fewer than 5 samples are pooled.
@@ -348,9 +349,10 @@ TEST(BsdfSampling, MatchesEvalPdfAndQuadrature) {
       worst_chi_z = std::max(worst_chi_z, z);
     }
   }
-  std::printf("[ measured ] mean weight vs albedo: worst %.2e abs, %.2f standard errors; chi-square worst z %.2f; "
-              "rejection worst %.2f sigma; pdf vs bsdf_pdf worst rel %.1e; weight vs eval·cos/pdf worst rel %.1e\n",
-              worst_mean_abs, worst_mean_sigma, worst_chi_z, worst_reject_sigma, worst_pdf_rel, worst_weight_rel);
+  std::printf(
+      "[ measured ] mean weight vs albedo: worst %.2e abs, %.2f standard errors; chi-square worst z %.2f; "
+      "rejection worst %.2f sigma; pdf vs bsdf_pdf worst rel %.1e; weight vs eval·cos/pdf worst rel %.1e\n",
+      worst_mean_abs, worst_mean_sigma, worst_chi_z, worst_reject_sigma, worst_pdf_rel, worst_weight_rel);
 }
 
 // The quadrature itself, where it is hardest (roughness 0.1, the narrowest lobes, thinnest at
@@ -566,8 +568,10 @@ TEST(BsdfEnergy, WhiteConductorNeverGains) {
       }
     }
   }
-  std::printf("[ measured ] white conductor: max sample weight %.7f; max albedo %.6f; at roughness 0.1, θo ≤ 20°: "
-              "min albedo %.6f\n", max_weight, max_albedo, min_near_normal);
+  std::printf(
+      "[ measured ] white conductor: max sample weight %.7f; max albedo %.6f; at roughness 0.1, θo ≤ 20°: "
+      "min albedo %.6f\n",
+      max_weight, max_albedo, min_near_normal);
 }
 
 // ---- Mirror ------------------------------------------------------------------------------------
@@ -761,8 +765,8 @@ TEST(BsdfDegenerate, BelowOrTangentGivesZeroAndNoNan) {
 
 TEST(BsdfFrame, OrthonormalIncludingPoles) {
   // The poles, the equator (with z = +0 and z = −0, which picks the other branch) and near-poles.
-  std::vector<vec3> normals = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0},
-                               {1, 0, -0.0f}, {0, 1, -0.0f}, {0.6f, -0.8f, -0.0f}};
+  std::vector<vec3> normals = {{0, 0, 1},  {0, 0, -1},    {1, 0, 0},     {0, 1, 0},           {-1, 0, 0},
+                               {0, -1, 0}, {1, 0, -0.0f}, {0, 1, -0.0f}, {0.6f, -0.8f, -0.0f}};
   for (float e : {1e-8f, 1e-6f, 1e-4f, 1e-2f})
     for (float sz : {1.0f, -1.0f}) {
       normals.push_back(glm::normalize(vec3(e, -0.5f * e, sz)));
@@ -778,8 +782,9 @@ TEST(BsdfFrame, OrthonormalIncludingPoles) {
     const Frame f = Frame::from_normal(n);
     const dvec3 t = to_d(f.t), b = to_d(f.b), nn = to_d(f.n);
     const double errs[] = {std::abs(glm::length(t) - 1.0), std::abs(glm::length(b) - 1.0),
-                           std::abs(glm::dot(t, b)), std::abs(glm::dot(t, nn)), std::abs(glm::dot(b, nn)),
-                           glm::length(glm::cross(t, b) - nn), glm::length(nn - to_d(n))};
+                           std::abs(glm::dot(t, b)),       std::abs(glm::dot(t, nn)),
+                           std::abs(glm::dot(b, nn)),      glm::length(glm::cross(t, b) - nn),
+                           glm::length(nn - to_d(n))};
     for (double e : errs) {
       EXPECT_LT(e, 1e-6) << "n = (" << n.x << ", " << n.y << ", " << n.z << ")";
       worst = std::max(worst, e);

@@ -174,14 +174,14 @@ TEST(EnvironmentMapping, RowZeroLooksUpAndPixelsAreWhereDocumented) {
     for (int j = 0; j < w; ++j) pixels.emplace_back(float(i), float(j), 1.0f);
   const Environment env = Environment::from_pixels(w, h, pixels);
   EXPECT_FALSE(env.is_constant());
-  EXPECT_EQ(env.radiance(vec3(0, 1, 0)).x, 0.0f);                 // +y: row 0 (u is moot at a pole)
+  EXPECT_EQ(env.radiance(vec3(0, 1, 0)).x, 0.0f);  // +y: row 0 (u is moot at a pole)
   EXPECT_EQ(env.radiance(vec3(0.1f, 1, 0.1f)).x, 0.0f);
-  EXPECT_EQ(env.radiance(vec3(0, -1, 0)).x, 2.0f);                 // -y: the last row
-  EXPECT_EQ(env.radiance(vec3(0, 0, -1)), Spectrum(1, 2, 1));      // -z: the centre pixel
-  EXPECT_EQ(env.radiance(vec3(1, 0, 0)), Spectrum(1, 3, 1));       // +x: u = 3/4
-  EXPECT_EQ(env.radiance(vec3(-1, 0, 0)), Spectrum(1, 1, 1));      // -x: u = 1/4
-  EXPECT_EQ(env.radiance(vec3(0.01f, 0, 1)).y, 4.0f);              // just past +z on the +x side: u ≈ 1
-  EXPECT_EQ(env.radiance(vec3(-0.01f, 0, 1)).y, 0.0f);             // on the -x side: u ≈ 0
+  EXPECT_EQ(env.radiance(vec3(0, -1, 0)).x, 2.0f);                      // -y: the last row
+  EXPECT_EQ(env.radiance(vec3(0, 0, -1)), Spectrum(1, 2, 1));           // -z: the centre pixel
+  EXPECT_EQ(env.radiance(vec3(1, 0, 0)), Spectrum(1, 3, 1));            // +x: u = 3/4
+  EXPECT_EQ(env.radiance(vec3(-1, 0, 0)), Spectrum(1, 1, 1));           // -x: u = 1/4
+  EXPECT_EQ(env.radiance(vec3(0.01f, 0, 1)).y, 4.0f);                   // just past +z on the +x side: u ≈ 1
+  EXPECT_EQ(env.radiance(vec3(-0.01f, 0, 1)).y, 0.0f);                  // on the -x side: u ≈ 0
   EXPECT_EQ(env.radiance(vec3(0, 2, 0)), env.radiance(vec3(0, 1, 0)));  // direction need not be unit
   // Every pixel at its documented centre, and near its corners.
   for (int i = 0; i < h; ++i) {
@@ -213,7 +213,8 @@ TEST(EnvironmentMapping, RadianceIntegralMatchesPixelSolidAngles) {
   // latitude: the integral changes by far more (checked here so that the bound means something).
   std::vector<Spectrum> shifted(t.pixels.size());
   for (int i = 0; i < t.h; ++i)
-    for (int j = 0; j < t.w; ++j) shifted[std::size_t(i) * t.w + j] = t.pixels[std::size_t(std::min(i + 1, t.h - 1)) * t.w + j];
+    for (int j = 0; j < t.w; ++j)
+      shifted[std::size_t(i) * t.w + j] = t.pixels[std::size_t(std::min(i + 1, t.h - 1)) * t.w + j];
   const dvec3 wrong = exact_radiance_integral(t.w, t.h, shifted);
   for (int c = 0; c < 3; ++c) EXPECT_GT(std::abs(wrong[c] - exact[c]) / exact[c], 1e-2);
 }
@@ -482,11 +483,11 @@ TEST(EnvironmentImage, PoleGuard) {
     }
   }
   std::printf("  largest pdf near the poles: %.3g\n", max_pdf);
-  EXPECT_EQ(env.pdf(vec3(0, 1, 0)), 0.0f);   // the pole itself
+  EXPECT_EQ(env.pdf(vec3(0, 1, 0)), 0.0f);  // the pole itself
   EXPECT_EQ(env.pdf(vec3(0, -1, 0)), 0.0f);
   EXPECT_GT(env.pdf(vec3(0.01f, 1, 0)), 0.0f);
   EXPECT_GT(env.pdf(vec3(1e-5f, -1, 0)), 0.0f);  // the guard cap is far smaller than 1e-5 rad
-  EXPECT_EQ(env.pdf(vec3(0.0f)), 0.0f);       // no direction
+  EXPECT_EQ(env.pdf(vec3(0.0f)), 0.0f);          // no direction
   EXPECT_EQ(env.radiance(vec3(NAN, 0, 1)), Spectrum(0.0f));
 }
 
@@ -541,10 +542,12 @@ TEST(SunLight, SamplesInsideConeUniformAndNormalised) {
     const double e = double(n) / (nh * na);
     for (long c : counts) chi2 += (c - e) * (c - e) / e;
     const double dof = nh * na - 1, bound = dof + 6.0 * std::sqrt(2.0 * dof);
-    const double est_err = glm::length(estimate - dvec3(sun.radiance) * omega) / glm::length(dvec3(sun.radiance) * omega);
-    std::printf("  r = %.5f: max angle / r = %.9f, max |pdf·Ω - 1| = %.1e, chi2 = %.1f (%.0f dof, bound %.1f), "
-                "E[L/pdf] relative error %.1e\n",
-                r, worst_angle, worst_pdf, chi2, dof, bound, est_err);
+    const double est_err =
+        glm::length(estimate - dvec3(sun.radiance) * omega) / glm::length(dvec3(sun.radiance) * omega);
+    std::printf(
+        "  r = %.5f: max angle / r = %.9f, max |pdf·Ω - 1| = %.1e, chi2 = %.1f (%.0f dof, bound %.1f), "
+        "E[L/pdf] relative error %.1e\n",
+        r, worst_angle, worst_pdf, chi2, dof, bound, est_err);
     EXPECT_LE(worst_angle, 1.0 + 1e-9) << r;
     EXPECT_LT(worst_pdf, 2e-7) << r;  // float rounding of 1/Ω
     EXPECT_EQ(mismatches, 0) << r;
@@ -585,9 +588,8 @@ TEST(SunLight, ZeroOutsideTheCone) {
 class EnvironmentLoad : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("gwnrt_env_test_" + std::to_string(std::random_device{}()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = std::filesystem::temp_directory_path() / ("gwnrt_env_test_" + std::to_string(std::random_device{}()) + "_" +
+                                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override {

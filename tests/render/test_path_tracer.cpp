@@ -98,10 +98,11 @@ TEST(PathTracer, FurnaceConvexGwnSphereReflectsAlbedoTimesEnvironment) {
     SCOPED_TRACE(albedo);
     const float environment = 1.0f;
     const FurnaceResult r = render_furnace(albedo, environment, 64);
-    std::printf("[ furnace albedo %.1f ] %zu sphere pixels: mean %.5f (expected %.5f, standard error %.2g); "
-                "background in [%.6f, %.6f]\n",
-                albedo, r.sphere.pixels, r.sphere.mean, double(albedo * environment), r.sphere.stderr_,
-                r.background_min, r.background_max);
+    std::printf(
+        "[ furnace albedo %.1f ] %zu sphere pixels: mean %.5f (expected %.5f, standard error %.2g); "
+        "background in [%.6f, %.6f]\n",
+        albedo, r.sphere.pixels, r.sphere.mean, double(albedo * environment), r.sphere.stderr_, r.background_min,
+        r.background_max);
     ASSERT_GT(r.sphere.pixels, 400u);
     // Unbiased: the mean over ~700 pixels of 64 samples lies within 5 standard errors of a·E,
     // and within 1% whatever the noise estimate says (a bias would show as a constant offset).
@@ -158,9 +159,9 @@ TEST(PathTracer, FurnaceGlassGwnSphereIsInvisible) {
 TEST(PathTracer, ImageEnvironmentLightsADiffuseSphereAsTheClosedFormSays) {
   const int w = 128, h = 64;
   const vec3 c0(1.0f, 1.0f, 1.0f);
-  const glm::mat3 c(vec3(0.5f, 0.0f, 0.0f),    // column x: ∂L/∂ω_x per channel
-                    vec3(0.8f, 0.8f, -0.6f),   // column y
-                    vec3(0.0f, 0.3f, 0.2f));   // column z
+  const glm::mat3 c(vec3(0.5f, 0.0f, 0.0f),   // column x: ∂L/∂ω_x per channel
+                    vec3(0.8f, 0.8f, -0.6f),  // column y
+                    vec3(0.0f, 0.3f, 0.2f));  // column z
   std::vector<float> pixels(size_t(w) * h * 3);
   for (int i = 0; i < h; ++i)
     for (int j = 0; j < w; ++j) {
@@ -217,9 +218,10 @@ TEST(PathTracer, ImageEnvironmentLightsADiffuseSphereAsTheClosedFormSays) {
     for (int k = 0; k < 3; ++k) {
       const double bias = diff[q][k] / n, mean_expected = expected_sum[q][k] / n;
       const double stderr_ = std::sqrt(std::max(0.0, diff2[q][k] / n - bias * bias) / n);
-      std::printf("[ image environment ] %s, channel %d: %zu pixels, expected %.4f, rendered − expected %+.5f "
-                  "(standard error %.2g)\n",
-                  names[q], k, count[q], mean_expected, bias, stderr_);
+      std::printf(
+          "[ image environment ] %s, channel %d: %zu pixels, expected %.4f, rendered − expected %+.5f "
+          "(standard error %.2g)\n",
+          names[q], k, count[q], mean_expected, bias, stderr_);
       // The lat-long pixels are constant over ~2.8°: a piecewise-constant image of a linear L
       // reflects the same a(c₀ + (2/3)c·n) up to O(pixel²) ≈ 1e-3 (the pixel centres' errors
       // cancel to first order). So: within 5 standard errors plus that, and within 2%.
@@ -276,7 +278,8 @@ TEST(PathTracer, FloorUnderAnEmissiveCeilingReflectsAlbedoTimesRadiance) {
   s.camera = examples::look_at(vec3(0.0f, 0.5f, 0.0f), vec3(0.3f, 0.0f, 0.2f), vec3(0.0f, 1.0f, 0.0f), 30.0f, 24, 24);
   size_t pixels = 0;
   const double mean = mean_radiance_on(s, 64, albedo, pixels);
-  std::printf("[ emissive ceiling ] %zu floor pixels: mean %.5f, expected %.5f\n", pixels, mean, double(albedo * emission));
+  std::printf("[ emissive ceiling ] %zu floor pixels: mean %.5f, expected %.5f\n", pixels, mean,
+              double(albedo * emission));
   ASSERT_GT(pixels, 500u);
   EXPECT_NEAR(mean, albedo * emission, 0.01 * albedo * emission);
 }
@@ -319,7 +322,8 @@ PathRender render_default_scene(int threads, uint64_t seed) {
 }
 
 TEST(PathTracer, SameSeedSameImageWhateverTheThreadCount) {
-  const PathRender one = render_default_scene(1, 5), two = render_default_scene(2, 5), other = render_default_scene(2, 6);
+  const PathRender one = render_default_scene(1, 5), two = render_default_scene(2, 5),
+                   other = render_default_scene(2, 6);
   ASSERT_EQ(one.image.data().size(), two.image.data().size());
   EXPECT_EQ(one.image.data(), two.image.data());  // bit for bit
   EXPECT_NE(one.image.data(), other.image.data());
@@ -373,7 +377,8 @@ TEST(SceneFile, BadFilesAreRefusedWithTheirPlace) {
   // And a good one: relative paths resolve next to the file.
   const std::string mesh = test::data_path("bunny_holes.obj");
   st = load_scene(write("good.json", R"({"materials": {"a": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
-      "gwn_objects": [{"file": ")" + mesh + R"(", "material": "a", "level": 0.4,
+      "gwn_objects": [{"file": ")" + mesh +
+                                         R"(", "material": "a", "level": 0.4,
                        "instances": [{"translate": [1, 2, 3]}, {"scale": 2}]}],
       "sun": {"direction": [0, 1, 0], "radiance": [1, 1, 1]}})"),
                   s);

@@ -14,7 +14,8 @@ class RenderCli : public ::testing::Test {
  protected:
   void SetUp() override {
     binary_ = test::example_binary("gwnrt-render");
-    if (binary_.empty()) GTEST_SKIP() << "gwnrt-render not built next to the tests (expected <tests>/../examples/gwnrt-render)";
+    if (binary_.empty())
+      GTEST_SKIP() << "gwnrt-render not built next to the tests (expected <tests>/../examples/gwnrt-render)";
   }
   // Runs with `args`, writing to a temporary image; checks it exists with the given size.
   void expect_image(const std::string& args, const std::string& extension, int width, int height) {
@@ -40,14 +41,15 @@ TEST_F(RenderCli, BundledSceneRenders) {
 
 // Glass (a GWN object), rough metal, an emissive quad, a sun: every material and light kind.
 TEST_F(RenderCli, MaterialsSceneRenders) {
-  expect_image(test::quote(test::data_path("materials_scene.json")) + " --spp 2 --width 32 --height 18",
-               ".exr", 32, 18);
+  expect_image(test::quote(test::data_path("materials_scene.json")) + " --spp 2 --width 32 --height 18", ".exr", 32,
+               18);
 }
 
 TEST_F(RenderCli, MeshGetsTheDefaultSceneWithAovs) {
   const std::string out = test::temp_path("aovs.exr");
-  const test::RunResult r = test::run_program(
-      binary_, test::quote(test::data_path("bunny_holes.obj")) + " --spp 1 --width 16 --height 12 --aovs -o " + test::quote(out));
+  const test::RunResult r =
+      test::run_program(binary_, test::quote(test::data_path("bunny_holes.obj")) +
+                                     " --spp 1 --width 16 --height 12 --aovs -o " + test::quote(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto in = OIIO::ImageInput::open(out);
   ASSERT_TRUE(in);
@@ -57,8 +59,8 @@ TEST_F(RenderCli, MeshGetsTheDefaultSceneWithAovs) {
 }
 
 TEST_F(RenderCli, FirstHitIntegratorRenders) {
-  expect_image(test::quote(test::data_path("bunny_holes.obj")) + " --integrator first-hit --width 24 --height 16", ".png",
-               24, 16);
+  expect_image(test::quote(test::data_path("bunny_holes.obj")) + " --integrator first-hit --width 24 --height 16",
+               ".png", 24, 16);
 }
 
 TEST_F(RenderCli, BadInputIsRefusedWithAMessage) {
@@ -68,8 +70,7 @@ TEST_F(RenderCli, BadInputIsRefusedWithAMessage) {
     f << R"({"materials": {"m": {"type": "diffuse", "albedo": [2, 0, 0]}}})";
   }
   for (const std::string& args : {test::quote(bad), std::string("/nonexistent/mesh.obj"),
-                                  test::quote(kScene) + " --aovs -o x.png",
-                                  test::quote(kScene) + " -o out.bmp"}) {
+                                  test::quote(kScene) + " --aovs -o x.png", test::quote(kScene) + " -o out.bmp"}) {
     SCOPED_TRACE(args);
     const test::RunResult r = test::run_program(binary_, args + " --spp 1 --width 8 --height 8");
     ASSERT_TRUE(r.exited);

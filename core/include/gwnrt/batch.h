@@ -24,8 +24,8 @@ Status validate_request(const QueryRequest& request, const ModelView* view = nul
 
 // hits.size() must equal rays.size(). Invalid rays (non-finite, zero direction) are not an
 // error of the batch: their hit has `invalid` set. Fails on a size mismatch or bad options.
-Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits, std::atomic<size_t>* progress = nullptr);
+Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options, std::span<RayHit> hits,
+                  std::atomic<size_t>* progress = nullptr);
 
 // Level finite, epsilon and beta finite and > 0, caps > 0.
 Status validate_trace_options(const TraceOptions& options);

@@ -26,7 +26,7 @@ using uvec3 = glm::uvec3;
 inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr float kInvPi = float(1.0 / kPi);
 inline constexpr float kInv4Pi = float(0.25 / kPi);
-inline constexpr float kDegree = float(kPi / 180.0);         // one degree in radians
+inline constexpr float kDegree = float(kPi / 180.0);       // one degree in radians
 inline constexpr float kInfinity = __builtin_huge_valf();  // +inf, usable on the device
 
 // Symmetric 3x3 matrix stored as its six independent entries (xx, xy, xz, yy, yz, zz).
@@ -35,7 +35,12 @@ struct Sym3 {
   T xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
   GWNRT_HD T trace() const { return xx + yy + zz; }
   GWNRT_HD Sym3& operator+=(const Sym3& o) {
-    xx += o.xx; xy += o.xy; xz += o.xz; yy += o.yy; yz += o.yz; zz += o.zz;
+    xx += o.xx;
+    xy += o.xy;
+    xz += o.xz;
+    yy += o.yy;
+    yz += o.yz;
+    zz += o.zz;
     return *this;
   }
   GWNRT_HD Sym3 operator*(T s) const { return {xx * s, xy * s, xz * s, yy * s, yz * s, zz * s}; }
@@ -46,7 +51,9 @@ struct Sym3 {
 using sym3 = Sym3<float>;
 
 template <class T>
-GWNRT_HD inline T sqr(T x) { return x * x; }
+GWNRT_HD inline T sqr(T x) {
+  return x * x;
+}
 
 // Minimum and maximum of numbers: fminf and fmaxf also order NaN, and for that GCC calls the
 // library on x86 instead of emitting one instruction. Callers that rely on NaN being dropped

@@ -13,7 +13,16 @@
 
 namespace gwnrt {
 
-enum class StatusCode { kOk = 0, kInvalidArgument, kIoError, kParseError, kInvalidMesh, kUnavailable, kInternal, kOutOfMemory };
+enum class StatusCode {
+  kOk = 0,
+  kInvalidArgument,
+  kIoError,
+  kParseError,
+  kInvalidMesh,
+  kUnavailable,
+  kInternal,
+  kOutOfMemory
+};
 
 class [[nodiscard]] Status {
  public:

@@ -155,8 +155,7 @@ Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of
   cone.positions.insert(cone.positions.end(), curve.endpoints.begin(), curve.endpoints.end());
   cone.positions.insert(cone.positions.end(), apex.begin(), apex.end());
   cone.triangles.reserve(n);
-  for (uint32_t s = 0; s < n; ++s)
-    cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
+  for (uint32_t s = 0; s < n; ++s) cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
   return cone;
 }
 

@@ -5,8 +5,8 @@
 #include <limits>
 #include <string>
 
-#include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/task_group.h>
 
 #include "gwnrt/geometry/bvh.h"
@@ -51,7 +51,10 @@ class Builder {
     };
     if (r.size() < kParallelGrain) return reduce(tbb::blocked_range<uint32_t>(r.begin, r.end), Aabb{});
     return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(r.begin, r.end, kParallelGrain), Aabb{}, reduce,
-                                [](Aabb a, const Aabb& b) { a.extend(b); return a; });
+                                [](Aabb a, const Aabb& b) {
+                                  a.extend(b);
+                                  return a;
+                                });
   }
 
   // Splits r at its median along the longest axis of its centroids' box.

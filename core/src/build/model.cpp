@@ -22,7 +22,7 @@ constexpr float kSheetAmbiguity = 0.1f;
 // SmoothRegion per group of loops (see model_view.h). Groups: the loops themselves, or, beyond
 // kMaxSmoothRegions, runs of loops sorted along the axis where their centres spread most.
 std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vector<uint32_t>& loop_of_segment,
-                                         uint32_t loop_count) {
+                                               uint32_t loop_count) {
   std::vector<Aabb> box(loop_count);
   std::vector<double> area(loop_count, 0.0);
   for (size_t s = 0; s < cone.triangles.size(); ++s) {
@@ -41,7 +41,8 @@ std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vect
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     std::vector<uint32_t> order(loop_count);
     for (uint32_t l = 0; l < loop_count; ++l) order[l] = l;
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return box[a].centre()[axis] < box[b].centre()[axis]; });
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return box[a].centre()[axis] < box[b].centre()[axis]; });
     for (uint32_t i = 0; i < loop_count; ++i) group[order[i]] = uint32_t(uint64_t(i) * kMaxSmoothRegions / loop_count);
     group_count = kMaxSmoothRegions;
   } else {
@@ -84,7 +85,8 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
                                           " triangles have zero area (nothing to evaluate)"};
   auto t1 = clock::now();
   model.boundary_ = extract_boundary(model.mesh_);
-  if (Status s = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments, model.boundary_tree_); !s.ok())
+  if (Status s = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments, model.boundary_tree_);
+      !s.ok())
     return s;
   uint32_t loop_count = 0;
   const std::vector<uint32_t> loop_of_segment = boundary_loops(model.boundary_, loop_count);

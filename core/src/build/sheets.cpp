@@ -1,10 +1,10 @@
 // Sheet classification: the other triangles' w at every triangle's centroid (sdf/sheets.h).
 #include <tbb/parallel_for.h>
 
-#include "gwnrt/geometry/triangle_tree.h"
-#include "gwnrt/sdf/sheets.h"
 #include "gwnrt/field/solid_angle.h"
 #include "gwnrt/field/winding_number.h"
+#include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/sdf/sheets.h"
 
 namespace gwnrt {
 namespace {

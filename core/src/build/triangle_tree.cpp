@@ -6,8 +6,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#include "gwnrt/geometry/triangle_tree.h"
 #include "gwnrt/field/multipole.h"
+#include "gwnrt/geometry/triangle_tree.h"
 
 namespace gwnrt {
 namespace {
@@ -96,7 +96,8 @@ class MomentBuilder {
     RawMoments m;
     dvec3 weighted{0.0}, plain{0.0};
     for (uint32_t t = first; t < first + count; ++t) {
-      const dvec3 p[3] = {dvec3(tree_.vertices[3 * t]), dvec3(tree_.vertices[3 * t + 1]), dvec3(tree_.vertices[3 * t + 2])};
+      const dvec3 p[3] = {dvec3(tree_.vertices[3 * t]), dvec3(tree_.vertices[3 * t + 1]),
+                          dvec3(tree_.vertices[3 * t + 2])};
       const double area = 0.5 * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
       const dvec3 centroid = (p[0] + p[1] + p[2]) / 3.0;
       weighted += area * centroid;
@@ -106,7 +107,8 @@ class MomentBuilder {
     m.centre = m.area > 0 ? weighted / m.area : plain / double(count);
     m.area = 0;
     for (uint32_t t = first; t < first + count; ++t) {
-      const dvec3 p[3] = {dvec3(tree_.vertices[3 * t]), dvec3(tree_.vertices[3 * t + 1]), dvec3(tree_.vertices[3 * t + 2])};
+      const dvec3 p[3] = {dvec3(tree_.vertices[3 * t]), dvec3(tree_.vertices[3 * t + 1]),
+                          dvec3(tree_.vertices[3 * t + 2])};
       add_triangle_moments(p, m.centre, m);
     }
     return m;
@@ -118,7 +120,8 @@ class MomentBuilder {
     RawMoments lanes[kBvhWidth];
     auto lane_work = [&](int i) {
       if (node.child[i] == kEmptyLane) return;
-      lanes[i] = node.count[i] > 0 ? leaf_moments(node.child[i], node.count[i]) : node_moments(node.child[i], depth + 1);
+      lanes[i] =
+          node.count[i] > 0 ? leaf_moments(node.child[i], node.count[i]) : node_moments(node.child[i], depth + 1);
     };
     if (depth < 4) {
       tbb::task_group tasks;
@@ -200,7 +203,12 @@ class MomentBuilder {
 }  // namespace
 
 TriangleTreeView TriangleTree::view() const {
-  return {bvh.view(), expansion.data(), order1.data(), order2.data(), vertices.data(), triangle_ids.data(),
+  return {bvh.view(),
+          expansion.data(),
+          order1.data(),
+          order2.data(),
+          vertices.data(),
+          triangle_ids.data(),
           uint32_t(triangle_ids.size())};
 }
 
@@ -211,7 +219,8 @@ Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTre
   kept.reserve(mesh.triangles.size());
   for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
     const uvec3 tri = mesh.triangles[t];
-    if (!is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) kept.push_back(t);
+    if (!is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]))
+      kept.push_back(t);
   }
   return build_triangle_tree(mesh, kept, max_leaf_size, out);
 }

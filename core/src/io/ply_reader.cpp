@@ -23,10 +23,14 @@ struct TyInfo {
 };
 
 constexpr TyInfo kTyInfo[] = {
-    {"char", "int8", 1, true, INT8_MIN, INT8_MAX},       {"uchar", "uint8", 1, true, 0, UINT8_MAX},
-    {"short", "int16", 2, true, INT16_MIN, INT16_MAX},   {"ushort", "uint16", 2, true, 0, UINT16_MAX},
-    {"int", "int32", 4, true, INT32_MIN, INT32_MAX},     {"uint", "uint32", 4, true, 0, UINT32_MAX},
-    {"float", "float32", 4, false, 0, 0},                {"double", "float64", 8, false, 0, 0},
+    {"char", "int8", 1, true, INT8_MIN, INT8_MAX},
+    {"uchar", "uint8", 1, true, 0, UINT8_MAX},
+    {"short", "int16", 2, true, INT16_MIN, INT16_MAX},
+    {"ushort", "uint16", 2, true, 0, UINT16_MAX},
+    {"int", "int32", 4, true, INT32_MIN, INT32_MAX},
+    {"uint", "uint32", 4, true, 0, UINT32_MAX},
+    {"float", "float32", 4, false, 0, 0},
+    {"double", "float64", 8, false, 0, 0},
 };
 
 const TyInfo& info(Ty t) { return kTyInfo[static_cast<int>(t)]; }
@@ -57,7 +61,7 @@ enum class PlyFormat { kAscii, kBinaryLe, kBinaryBe };
 struct PlyHeader {
   PlyFormat format = PlyFormat::kAscii;
   std::vector<PlyElem> elems;
-  int vertex = -1;     // element indices
+  int vertex = -1;  // element indices
   int face = -1;
   int face_list = -1;  // property index of vertex_indices within the face element
   size_t data_offset = 0;
@@ -119,7 +123,8 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
       have_format = true;
     } else if (kw == "element") {
       if (!have_format) return err("'element' before the 'format' line (missing format line?)");
-      if (!tk.next(a) || !tk.next(b) || tk.next(extra)) return err("malformed element line (expected 'element NAME COUNT')");
+      if (!tk.next(a) || !tk.next(b) || tk.next(extra))
+        return err("malformed element line (expected 'element NAME COUNT')");
       const char* const e = b.data() + b.size();
       uint64_t count = 0;
       const auto [ptr, ec] = std::from_chars(b.data(), e, count);
@@ -190,7 +195,8 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
   if (h.face >= 0) {
     const PlyElem& face = h.elems[static_cast<size_t>(h.face)];
     for (size_t j = 0; j < face.props.size() && h.face_list < 0; ++j) {
-      if (face.props[j].name == "vertex_indices" || face.props[j].name == "vertex_index") h.face_list = static_cast<int>(j);
+      if (face.props[j].name == "vertex_indices" || face.props[j].name == "vertex_index")
+        h.face_list = static_cast<int>(j);
     }
     if (h.face_list < 0) {
       return {StatusCode::kParseError, cat(path, ": the face element has no 'vertex_indices' list property")};
@@ -240,19 +246,35 @@ struct BinarySource {
   Res read_value(Ty t, V& v) {
     if (remaining() < info(t).size) return Res::kEnd;
     switch (t) {
-      case Ty::kI8: v = static_cast<int8_t>(*p); break;
-      case Ty::kU8: v = *p; break;
-      case Ty::kI16: v = std::bit_cast<int16_t>(load_bits<kSwap, uint16_t>(p)); break;
-      case Ty::kU16: v = load_bits<kSwap, uint16_t>(p); break;
-      case Ty::kI32: v = std::bit_cast<int32_t>(load_bits<kSwap, uint32_t>(p)); break;
-      case Ty::kU32: v = load_bits<kSwap, uint32_t>(p); break;
+      case Ty::kI8:
+        v = static_cast<int8_t>(*p);
+        break;
+      case Ty::kU8:
+        v = *p;
+        break;
+      case Ty::kI16:
+        v = std::bit_cast<int16_t>(load_bits<kSwap, uint16_t>(p));
+        break;
+      case Ty::kU16:
+        v = load_bits<kSwap, uint16_t>(p);
+        break;
+      case Ty::kI32:
+        v = std::bit_cast<int32_t>(load_bits<kSwap, uint32_t>(p));
+        break;
+      case Ty::kU32:
+        v = load_bits<kSwap, uint32_t>(p);
+        break;
       case Ty::kF32:
-        if constexpr (std::is_integral_v<V>) return Res::kBad;
-        else v = std::bit_cast<float>(load_bits<kSwap, uint32_t>(p));
+        if constexpr (std::is_integral_v<V>)
+          return Res::kBad;
+        else
+          v = std::bit_cast<float>(load_bits<kSwap, uint32_t>(p));
         break;
       case Ty::kF64:
-        if constexpr (std::is_integral_v<V>) return Res::kBad;
-        else v = std::bit_cast<double>(load_bits<kSwap, uint64_t>(p));
+        if constexpr (std::is_integral_v<V>)
+          return Res::kBad;
+        else
+          v = std::bit_cast<double>(load_bits<kSwap, uint64_t>(p));
         break;
     }
     p += info(t).size;
@@ -273,8 +295,8 @@ struct AsciiSource {
   static constexpr bool kAscii = true;
   const char* p;
   const char* end;
-  size_t line;       // line of the scan position
-  size_t tok_line;   // line of the last token read, for messages
+  size_t line;      // line of the scan position
+  size_t tok_line;  // line of the last token read, for messages
   string_view tok;
   string_view bad_tok;
   Ty bad_ty = Ty::kF32;
@@ -392,7 +414,8 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
           }
           if (r == Res::kOk && is_face && static_cast<int>(j) == h.face_list) {
             if (n < 3) {
-              return {StatusCode::kInvalidMesh, cat(src.where(path), ": face ", i, " has ", n, " corners, needs at least 3")};
+              return {StatusCode::kInvalidMesh,
+                      cat(src.where(path), ": face ", i, " has ", n, " corners, needs at least 3")};
             }
             corners.clear();
             for (int64_t k = 0; k < n && r == Res::kOk; ++k) {
@@ -414,20 +437,21 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
           }
         }
         if (r == Res::kEnd) {
-          return {StatusCode::kParseError, cat(src.where(path), ": truncated data: the file ends inside ", el.name, " ", i,
-                                               " of ", el.count, " (property '", pr.name, "')")};
+          return {StatusCode::kParseError, cat(src.where(path), ": truncated data: the file ends inside ", el.name, " ",
+                                               i, " of ", el.count, " (property '", pr.name, "')")};
         }
         if (r == Res::kBad) {
-          return {StatusCode::kParseError, cat(src.where(path), ": invalid ", info(src.bad_ty).name, " value ",
-                                               quoted(src.bad_tok), " in ", el.name, " ", i, ", property '", pr.name, "'")};
+          return {StatusCode::kParseError,
+                  cat(src.where(path), ": invalid ", info(src.bad_ty).name, " value ", quoted(src.bad_tok), " in ",
+                      el.name, " ", i, ", property '", pr.name, "'")};
         }
       }
       if (is_vertex) mesh.positions[i] = vec3(xyz[0], xyz[1], xyz[2]);
     }
   }
   if (!src.only_whitespace_left()) {
-    return {StatusCode::kParseError,
-            cat(src.where(path), ": unexpected data ", quoted(src.bad_tok), " after the last element declared in the header")};
+    return {StatusCode::kParseError, cat(src.where(path), ": unexpected data ", quoted(src.bad_tok),
+                                         " after the last element declared in the header")};
   }
   return Status::Ok();
 }

@@ -25,7 +25,6 @@ using std::uint64_t;
 
 // Numbers
 
-
 // std::from_chars rejects the leading '+' that some exporters write.
 inline string_view drop_plus(string_view s) {
   if (s.size() >= 2 && s[0] == '+' && s[1] != '+' && s[1] != '-') s.remove_prefix(1);

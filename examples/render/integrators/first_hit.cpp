@@ -24,12 +24,16 @@ void FirstHitStats::add(const RayHit& hit, const vec3& dir, const TraceOptions& 
   if (hit.invalid) ++invalid;
   if (hit.capped) {
     // RayHit says only that a cap ended the trace; which one is told by the count that reached it.
-    if (hit.steps >= options.max_steps) ++step_capped;
-    else ++crossing_capped;
+    if (hit.steps >= options.max_steps)
+      ++step_capped;
+    else
+      ++crossing_capped;
   }
   if (!hit.hit) return;
-  if (hit.kind == HitKind::kSmooth) ++smooth_hits;
-  else ++sheet_hits;
+  if (hit.kind == HitKind::kSmooth)
+    ++smooth_hits;
+  else
+    ++sheet_hits;
   if (glm::dot(hit.normal, dir) > 0.0f) ++facing_away;
 }
 
@@ -95,9 +99,12 @@ Image steps_image(const FirstHitRender& render, uint32_t scale_max) {
     for (int x = 0; x < width; ++x) {
       const PixelTrace& t = render.traces[std::size_t(y) * std::size_t(width) + std::size_t(x)];
       vec3 colour;
-      if (t.capped) colour = vec3(kStatsCapped[0], kStatsCapped[1], kStatsCapped[2]);
-      else if (t.steps == 0) colour = vec3(t.kind == HitKind::kNone ? kStatsMissGrey : kStatsNoStepGrey);
-      else colour = false_colour(std::log2(float(t.steps)) / log_max);
+      if (t.capped)
+        colour = vec3(kStatsCapped[0], kStatsCapped[1], kStatsCapped[2]);
+      else if (t.steps == 0)
+        colour = vec3(t.kind == HitKind::kNone ? kStatsMissGrey : kStatsNoStepGrey);
+      else
+        colour = false_colour(std::log2(float(t.steps)) / log_max);
       float* p = image.pixel(x, y);
       p[0] = colour.x;
       p[1] = colour.y;
@@ -140,13 +147,14 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
 
   const FirstHitStats& stats = render.stats;
   const double rays_per_second = render.seconds > 0 ? double(stats.rays) / render.seconds : 0.0;
-  std::printf("%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
-              "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
-              kProgram, job.width, job.height, render.seconds, count_of(thread_limit.workers(), "thread").c_str(),
-              examples::human_count(rays_per_second).c_str(), stats.mean_steps(), stats.max_steps,
-              stats.mean_crossings(), (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
-              (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
-              (unsigned long long)(stats.step_capped + stats.crossing_capped));
+  std::printf(
+      "%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
+      "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
+      kProgram, job.width, job.height, render.seconds, count_of(thread_limit.workers(), "thread").c_str(),
+      examples::human_count(rays_per_second).c_str(), stats.mean_steps(), stats.max_steps, stats.mean_crossings(),
+      (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
+      (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
+      (unsigned long long)(stats.step_capped + stats.crossing_capped));
   std::fflush(stdout);
   if (stats.step_capped) {
     warn(count_of(stats.step_capped, "ray") + " hit the step cap (--max-steps " + std::to_string(trace.max_steps) +
@@ -163,18 +171,21 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
     warn(count_of(stats.facing_away, "hit") + " with an outward normal facing away from the camera");
   }
 
-  if (Status s = write_image(job.output, render.colour, description); !s.ok()) return examples::fail(kProgram, s.message());
+  if (Status s = write_image(job.output, render.colour, description); !s.ok())
+    return examples::fail(kProgram, s.message());
   std::printf("%s: wrote %s\n", kProgram, job.output.c_str());
   if (!job.stats_image.empty()) {
     const Image steps = steps_image(render);
-    if (Status s = write_image(job.stats_image, steps, description); !s.ok()) return examples::fail(kProgram, s.message());
+    if (Status s = write_image(job.stats_image, steps, description); !s.ok())
+      return examples::fail(kProgram, s.message());
     if (stats.max_steps == 0) {
       std::printf("%s: wrote %s (no ray took a Harnack step: grey is a hit, black a miss)\n", kProgram,
                   job.stats_image.c_str());
     } else {
-      std::printf("%s: wrote %s (Harnack steps per pixel, log scale from dark blue = 1 to red = %u; grey: a hit "
-                  "without steps; black: a miss without steps; magenta: capped)\n",
-                  kProgram, job.stats_image.c_str(), std::max(stats.max_steps, 2u));
+      std::printf(
+          "%s: wrote %s (Harnack steps per pixel, log scale from dark blue = 1 to red = %u; grey: a hit "
+          "without steps; black: a miss without steps; magenta: capped)\n",
+          kProgram, job.stats_image.c_str(), std::max(stats.max_steps, 2u));
     }
   }
   return 0;

@@ -50,10 +50,10 @@ struct FirstHitSettings {
 };
 
 struct FirstHitRender {
-  Image colour;                     // linear RGB
-  std::vector<PixelTrace> traces;   // row-major, one per pixel
+  Image colour;                    // linear RGB
+  std::vector<PixelTrace> traces;  // row-major, one per pixel
   FirstHitStats stats;
-  double seconds = 0;               // wall-clock time of the parallel tracing alone
+  double seconds = 0;  // wall-clock time of the parallel tracing alone
 };
 
 // Renders camera.width × camera.height pixels. `progress`, when given, counts finished pixels.
@@ -74,8 +74,8 @@ struct FirstHitJob {
   std::string stats_image;  // empty: none
   int width = 800, height = 600;
   float azimuth = 30.0f, elevation = 20.0f, fov_degrees = 40.0f;  // frame_box's camera
-  FirstHitSettings settings;  // trace options that passed validate_trace_options
-  int threads = 0;            // 0: all cores
+  FirstHitSettings settings;                                      // trace options that passed validate_trace_options
+  int threads = 0;                                                // 0: all cores
 };
 
 // Loads and builds the mesh, renders it, prints the summary (rays/s, steps, hits, caps) and

@@ -130,10 +130,10 @@ Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& di
     SurfaceHit hit;
     if (!scene.intersect(o, d, offset * (depth == 0 ? 0.0f : 1.0f), std::numeric_limits<float>::infinity(), hit)) {
       // Escaped: the environment and the sun, weighted against next-event estimation.
-      Spectrum l = scene.environment().radiance(d) * (specular || !choice.environment
-                                                          ? 1.0f
-                                                          : power_heuristic(bsdf_pdf_prev, choice.probability() *
-                                                                                               scene.environment().pdf(d)));
+      Spectrum l = scene.environment().radiance(d) *
+                   (specular || !choice.environment
+                        ? 1.0f
+                        : power_heuristic(bsdf_pdf_prev, choice.probability() * scene.environment().pdf(d)));
       const Spectrum sun = scene.sun().radiance_toward(d);
       if (!is_black(sun))
         l += sun * (specular ? 1.0f : power_heuristic(bsdf_pdf_prev, choice.probability() * scene.sun().pdf(d)));
@@ -149,7 +149,8 @@ Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& di
     if (m.kind == MaterialKind::kEmissive) {
       float w = 1.0f;
       if (!specular && !hit.gwn && choice.area)
-        w = power_heuristic(bsdf_pdf_prev, choice.probability() * area_light_pdf(scene, p_prev, hit.position, hit.normal));
+        w = power_heuristic(bsdf_pdf_prev,
+                            choice.probability() * area_light_pdf(scene, p_prev, hit.position, hit.normal));
       radiance += throughput * m.emission * w;
       break;
     }
@@ -168,7 +169,8 @@ Spectrum trace_path(const RenderScene& scene, const vec3& origin, const vec3& di
         const vec3 wi = frame.to_local(ls.direction);
         const Spectrum f = bsdf_eval(m, wo, wi);
         if (!is_black(f) && !is_black(ls.radiance)) {
-          const float tmax = std::isinf(ls.distance) ? std::numeric_limits<float>::infinity() : ls.distance * (1.0f - 1e-4f);
+          const float tmax =
+              std::isinf(ls.distance) ? std::numeric_limits<float>::infinity() : ls.distance * (1.0f - 1e-4f);
           if (!scene.occluded(above, ls.direction, 0.0f, tmax)) {
             const float w = power_heuristic(ls.pdf, bsdf_pdf(m, wo, wi));
             radiance += throughput * f * std::abs(wi.z) * ls.radiance * (w / ls.pdf);
@@ -222,8 +224,8 @@ PathRender render_paths(const RenderScene& scene, const RenderSettings& settings
           const float v = sampler.next();
           const Ray ray = cam.ray(x, y, u, v);
           SampleAovs first;
-          const Spectrum l =
-              trace_path(scene, ray.origin, ray.direction, settings.max_depth, sampler, settings.aovs ? &first : nullptr);
+          const Spectrum l = trace_path(scene, ray.origin, ray.direction, settings.max_depth, sampler,
+                                        settings.aovs ? &first : nullptr);
           if (std::isfinite(l.x + l.y + l.z)) sum += l;  // a NaN sample would poison the pixel: dropped
           aov_sum.albedo += first.albedo;
           aov_sum.normal += first.normal;

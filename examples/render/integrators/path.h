@@ -50,9 +50,9 @@ PathRender render_paths(const RenderScene& scene, const RenderSettings& settings
 // What `gwnrt-render` (the path integrator) was asked for, every option already checked: a scene
 // file or a mesh (rendered in its default scene), and what overrides the scene's own settings.
 struct PathJob {
-  std::string input;   // .json: a scene file; else a mesh
-  std::string output;  // the image (.png: tone-mapped; .exr: linear)
-  int width = 800, height = 600;               // a mesh's image size; a scene's when set_*
+  std::string input;              // .json: a scene file; else a mesh
+  std::string output;             // the image (.png: tone-mapped; .exr: linear)
+  int width = 800, height = 600;  // a mesh's image size; a scene's when set_*
   bool set_width = false, set_height = false;
   int spp = 0, max_depth = 0;  // 0: the scene's
   int64_t seed = -1;           // negative: the scene's

@@ -40,17 +40,17 @@ typedef struct GWNRTMeshTy* GWNRTMesh;
 #define GWNRT_SMOOTH_PRIM_ID 0xFFFFFFFEu
 
 enum GWNRTMode {
-  GWNRT_MODE_GWN = 0,         /* S = ∂{w > level}: sheets on the mesh and smooth caps over holes */
-  GWNRT_MODE_SOLID_ANGLE = 1  /* {Ω ≡ 4π·level mod 4π}: smooth pieces only */
+  GWNRT_MODE_GWN = 0,        /* S = ∂{w > level}: sheets on the mesh and smooth caps over holes */
+  GWNRT_MODE_SOLID_ANGLE = 1 /* {Ω ≡ 4π·level mod 4π}: smooth pieces only */
 };
 
 typedef struct GWNRTOptions {
-  enum GWNRTMode mode;     /* default GWNRT_MODE_GWN */
-  float level;             /* w* (default 0.5); in solid-angle mode Ω over 4π (0.5 is 2π) */
-  float epsilon;           /* stopping distance relative to the mesh's box diagonal, default 1e-5 */
-  unsigned int max_steps;  /* Harnack steps per ray, default 4096 (a ray reaching it misses) */
+  enum GWNRTMode mode;        /* default GWNRT_MODE_GWN */
+  float level;                /* w* (default 0.5); in solid-angle mode Ω over 4π (0.5 is 2π) */
+  float epsilon;              /* stopping distance relative to the mesh's box diagonal, default 1e-5 */
+  unsigned int max_steps;     /* Harnack steps per ray, default 4096 (a ray reaching it misses) */
   unsigned int max_crossings; /* triangle crossings per ray, default 65536 */
-  float beta;              /* multipole accuracy scale, default 2 (larger: slower, more accurate) */
+  float beta;                 /* multipole accuracy scale, default 2 (larger: slower, more accurate) */
 } GWNRTOptions;
 
 /* Copies xyz (3 floats per vertex) and triangles (3 indices per triangle) and builds. */

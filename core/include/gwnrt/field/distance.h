@@ -6,7 +6,6 @@
 
 namespace gwnrt {
 
-
 template <class T>
 struct ClosestPoint {
   glm::vec<3, T> point;
@@ -73,9 +72,9 @@ GWNRT_HD inline ClosestPoint<T> closest_point_on_triangle(const glm::vec<3, T>& 
 }
 
 struct NearestPrimitive {
-  float distance = kInfinity;        // +inf when the tree is empty
-  uint32_t primitive = kEmptyLane;   // input index (triangle or boundary segment)
-  float u = 0, v = 0;                // barycentrics of the closest point
+  float distance = kInfinity;       // +inf when the tree is empty
+  uint32_t primitive = kEmptyLane;  // input index (triangle or boundary segment)
+  float u = 0, v = 0;               // barycentrics of the closest point
   vec3 point{0.0f};
 };
 

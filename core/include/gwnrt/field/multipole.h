@@ -19,10 +19,10 @@ namespace gwnrt {
 
 // Compressed moments of one cluster, as stored per BVH lane.
 struct Moments {
-  float n[3];    // order 0: area-weighted normal N
-  float s[6];    // order 1: S = N₁ + N₁ᵀ as (xx, xy, xz, yy, yz, zz)
-  float p[10];   // order 2: symmetric P as (xxx, xxy, xxz, xyy, xyz, xzz, yyy, yyz, yzz, zzz)
-  float e[3];    // order 2: trace vector e
+  float n[3];   // order 0: area-weighted normal N
+  float s[6];   // order 1: S = N₁ + N₁ᵀ as (xx, xy, xz, yy, yz, zz)
+  float p[10];  // order 2: symmetric P as (xxx, xxy, xxz, xyy, xyz, xzz, yyy, yyz, yzz, zzz)
+  float e[3];   // order 2: trace vector e
 };
 
 // Derivative request of one evaluation; the template flags let the compiler drop unused work.

@@ -34,8 +34,8 @@ GWNRT_HD inline SolidAngleTangent<T> triangle_solid_angle_tangent(const glm::vec
 }
 
 template <class T>
-GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
-                                       const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
+GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1, const glm::vec<3, T>& p2,
+                                       const glm::vec<3, T>& x) {
   const SolidAngleTangent<T> tangent = triangle_solid_angle_tangent(p0, p1, p2, x);
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
   return T(2) * arctan2(tangent.numerator, tangent.denominator);
@@ -82,10 +82,10 @@ namespace detail {
 // on the edge's line, which is the limit of the field on the line outside the segment.
 template <class T>
 struct EdgeField {
-  glm::vec<3, T> e;        // g_j - g_i, constant in x
-  glm::vec<3, T> c;        // g_i × g_j
-  T c2;                    // |c|²
-  T f;                     // e·(ĝ_j - ĝ_i)
+  glm::vec<3, T> e;  // g_j - g_i, constant in x
+  glm::vec<3, T> c;  // g_i × g_j
+  T c2;              // |c|²
+  T f;               // e·(ĝ_j - ĝ_i)
   glm::vec<3, T> gi_hat, gj_hat;
   T inv_li, inv_lj;
   bool degenerate;

@@ -2,15 +2,15 @@
 // ∇w and H_w from the same traversal) and the brute-force reference. Host-and-device.
 #pragma once
 
-#include "gwnrt/geometry/bvh.h"
 #include "gwnrt/field/multipole.h"
 #include "gwnrt/field/solid_angle.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 
 struct TaylorOptions {
-  int order = 2;       // 0, 1 or 2
-  float beta = 2.0f;   // a cluster is expanded when |x - p̄| > beta · radius
+  int order = 2;      // 0, 1 or 2
+  float beta = 2.0f;  // a cluster is expanded when |x - p̄| > beta · radius
 };
 
 template <class T>
@@ -136,15 +136,19 @@ GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const
 // asking for w alone costs what w alone costs.
 GWNRT_HD inline WindingSample winding_number(const TriangleTreeView& tree, const vec3& x, const TaylorOptions& options,
                                              bool want_gradient = false, bool want_hessian = false) {
-#define GWNRT_DISPATCH_ORDER(O)                                                                        \
-  if (want_hessian) return want_gradient ? winding_number_taylor<O, true, true>(tree, x, options.beta) \
-                                         : winding_number_taylor<O, false, true>(tree, x, options.beta); \
-  return want_gradient ? winding_number_taylor<O, true, false>(tree, x, options.beta)                    \
+#define GWNRT_DISPATCH_ORDER(O)                                                          \
+  if (want_hessian)                                                                      \
+    return want_gradient ? winding_number_taylor<O, true, true>(tree, x, options.beta)   \
+                         : winding_number_taylor<O, false, true>(tree, x, options.beta); \
+  return want_gradient ? winding_number_taylor<O, true, false>(tree, x, options.beta)    \
                        : winding_number_taylor<O, false, false>(tree, x, options.beta);
   switch (options.order) {
-    case 0: GWNRT_DISPATCH_ORDER(0)
-    case 1: GWNRT_DISPATCH_ORDER(1)
-    default: GWNRT_DISPATCH_ORDER(2)
+    case 0:
+      GWNRT_DISPATCH_ORDER(0)
+    case 1:
+      GWNRT_DISPATCH_ORDER(1)
+    default:
+      GWNRT_DISPATCH_ORDER(2)
   }
 #undef GWNRT_DISPATCH_ORDER
 }

@@ -81,7 +81,7 @@ struct TriangleTreeView {
   const WideNodeExpansion* expansion = nullptr;
   const WideNodeOrder1* order1 = nullptr;
   const WideNodeOrder2* order2 = nullptr;
-  const vec3* vertices = nullptr;        // 3 per triangle, in leaf order
+  const vec3* vertices = nullptr;          // 3 per triangle, in leaf order
   const uint32_t* triangle_ids = nullptr;  // leaf order -> input triangle index
   uint32_t triangle_count = 0;
 };
@@ -98,8 +98,14 @@ struct SegmentTreeView {
 struct Aabb {
   vec3 lo{3.4e38f};
   vec3 hi{-3.4e38f};
-  GWNRT_HD void extend(const vec3& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
-  GWNRT_HD void extend(const Aabb& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+  GWNRT_HD void extend(const vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  GWNRT_HD void extend(const Aabb& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
   GWNRT_HD vec3 centre() const { return 0.5f * (lo + hi); }
   GWNRT_HD bool valid() const { return lo.x <= hi.x; }
 };

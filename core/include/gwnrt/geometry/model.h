@@ -16,7 +16,6 @@
 
 namespace gwnrt {
 
-
 // Leaves hold at most this many primitives (the traversals' per-leaf loops assume few).
 inline constexpr uint32_t kMaxLeafSize = 64;
 

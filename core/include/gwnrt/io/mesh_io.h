@@ -12,10 +12,10 @@ namespace gwnrt {
 // What loading found, for the user to read; none of it is an error.
 struct MeshLoadReport {
   std::size_t vertex_count = 0;
-  std::size_t triangle_count = 0;         // after fanning polygons
-  std::size_t polygons_fanned = 0;        // input faces with more than three corners
-  std::size_t degenerate_triangles = 0;   // zero area (repeated or collinear corners): contribute nothing
-  std::string format;                     // "obj", "ply-ascii", "ply-binary-le", "ply-binary-be"
+  std::size_t triangle_count = 0;        // after fanning polygons
+  std::size_t polygons_fanned = 0;       // input faces with more than three corners
+  std::size_t degenerate_triangles = 0;  // zero area (repeated or collinear corners): contribute nothing
+  std::string format;                    // "obj", "ply-ascii", "ply-binary-le", "ply-binary-be"
 };
 
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned

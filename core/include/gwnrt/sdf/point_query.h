@@ -3,9 +3,9 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
+#include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/sdf/signed_distance.h"
-#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 
@@ -39,10 +39,10 @@ struct PointResult {
   sym3 hessian;
   float unsigned_distance = 0;
   uint32_t nearest_triangle = kEmptyLane;
-  float bary_u = 0, bary_v = 0;          // of the closest point on nearest_triangle
-  float boundary_distance = 0;           // +inf for a closed mesh
+  float bary_u = 0, bary_v = 0;  // of the closest point on nearest_triangle
+  float boundary_distance = 0;   // +inf for a closed mesh
   uint32_t nearest_boundary_segment = kEmptyLane;
-  SignedDistance sdf;                    // distance, first_order, second_order, sheet distance
+  SignedDistance sdf;  // distance, first_order, second_order, sheet distance
   SurfaceProjection projection;
   float harnack_bound = 0;
 };
@@ -100,8 +100,9 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
     r.nearest_boundary_segment = n.primitive;
   }
   if (request.fields & kFieldHarnackBound) {
-    const float mesh_distance = (request.fields & kFieldUnsignedDistance) ? r.unsigned_distance
-                                                                           : unsigned_distance(model.triangles, x).distance;
+    const float mesh_distance = (request.fields & kFieldUnsignedDistance)
+                                    ? r.unsigned_distance
+                                    : unsigned_distance(model.triangles, x).distance;
     r.harnack_bound = harnack_lower_bound(model, x, request.level, request.taylor.beta, mesh_distance);
   }
   return r;

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <span>
 
-#include "gwnrt/hd.h"
 #include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/hd.h"
 
 namespace gwnrt {
 

@@ -5,11 +5,11 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
-#include "gwnrt/trace/harnack.h"
+#include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/harnack.h"
 #include "gwnrt/trace/phase.h"
 #include "gwnrt/trace/surface_trace.h"
-#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 
@@ -46,16 +46,16 @@ GWNRT_HD inline float curvature_corrected_distance(float w, const vec3& gradient
 // Newton projection onto the smooth part of S: x ← x − (w − w*) ∇w / |∇w|².
 struct NewtonOptions {
   uint32_t max_iterations = 32;
-  float tolerance = 1e-4f;       // converged when |w − w*| <= tolerance
-  float max_step = 0.1f;         // a step is at most this fraction of M's box diagonal ...
-  float mesh_fraction = 0.9f;    // ... and at most this fraction of the distance to M
+  float tolerance = 1e-4f;     // converged when |w − w*| <= tolerance
+  float max_step = 0.1f;       // a step is at most this fraction of M's box diagonal ...
+  float mesh_fraction = 0.9f;  // ... and at most this fraction of the distance to M
 };
 
 struct SurfaceProjection {
   vec3 point{0.0f};
   uint32_t iterations = 0;  // Newton steps taken
   bool converged = false;
-  float residual = 0.0f;    // w − w* at `point`
+  float residual = 0.0f;  // w − w* at `point`
 };
 
 // Each step is clipped to the ball around x that M does not enter (times mesh_fraction): w is
@@ -164,13 +164,13 @@ enum class DistancePiece : uint32_t {
 };
 
 struct SignedDistance {
-  float distance = kInfinity;       // sdf: negative inside {w > w*}
+  float distance = kInfinity;  // sdf: negative inside {w > w*}
   // sdf1 = d₁ and sdf2 = d₂; NaN where signed_distance did not need them (no smooth piece of S
   // can be nearer than the sheets; d₂ also where |d₁| >= 2 × the sheet distance): ask for them
   // with kFieldPseudoDistance.
   float first_order = kInfinity;
   float second_order = kInfinity;
-  float sheet_distance = kInfinity; // unsigned, to the sheet triangles (+inf when there are none)
+  float sheet_distance = kInfinity;  // unsigned, to the sheet triangles (+inf when there are none)
   uint32_t sheet_triangle = kEmptyLane;
   DistancePiece piece = DistancePiece::kSheet;
 };

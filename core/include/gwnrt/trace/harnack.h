@@ -37,7 +37,7 @@ inline constexpr float kAngleLowerBound = -1.0f;
 
 GWNRT_HD inline float angle_valued_step(float radius, float phi, const LevelBracket& levels) {
   return min_of(harnack_step(radius, phi, levels.below, kAngleLowerBound),
-               harnack_step(radius, phi, levels.above, kAngleLowerBound));
+                harnack_step(radius, phi, levels.above, kAngleLowerBound));
 }
 
 // A bound on |∇φ| from the same ball: a positive harmonic u on a ball of radius R in 3D has
@@ -75,8 +75,8 @@ GWNRT_HD inline float level_free_radius(float radius, float gradient_bound, floa
 inline constexpr float kCurvatureBallFraction = 0.25f;  // θ: both Δ and the step stay within θR
 
 GWNRT_HD inline float curvature_bound(float radius, float gradient_bound) {
-  constexpr float shrink = (1.0f - kCurvatureBallFraction) * (1.0f - kCurvatureBallFraction) *
-                           (1.0f - kCurvatureBallFraction);
+  constexpr float shrink =
+      (1.0f - kCurvatureBallFraction) * (1.0f - kCurvatureBallFraction) * (1.0f - kCurvatureBallFraction);
   return 2.0f * gradient_bound / (radius * shrink);
 }
 

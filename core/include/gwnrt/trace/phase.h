@@ -14,16 +14,16 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
-#include "gwnrt/geometry/model_view.h"
 #include "gwnrt/field/winding_number.h"
+#include "gwnrt/geometry/model_view.h"
 
 namespace gwnrt {
 
 struct PhaseSample {
-  float phi = 0.0f;                       // w mod 1, in [0, 1)
-  vec3 gradient{0.0f};                    // ∇w, when asked for
-  float boundary_distance = kInfinity;    // a lower bound on the distance to ∂M (exact near it)
-  float gradient_bound = 0.0f;            // K >= (1/4π) ∮ |dl| / |l - x|² >= |∇w(x)|
+  float phi = 0.0f;                     // w mod 1, in [0, 1)
+  vec3 gradient{0.0f};                  // ∇w, when asked for
+  float boundary_distance = kInfinity;  // a lower bound on the distance to ∂M (exact near it)
+  float gradient_bound = 0.0f;          // K >= (1/4π) ∮ |dl| / |l - x|² >= |∇w(x)|
 };
 
 // ∫ |dl| / |l - x|² over a segment of length L seen from x, bounded from above without
@@ -101,7 +101,8 @@ struct PhaseSum {
     nearest2 = dist2 < nearest2 ? dist2 : nearest2;
     // In double: the cone's long inner edges carry large Biot–Savart terms that cancel between
     // neighbours, and in float that cancellation bends normals above a flat cap by 1e-2.
-    if constexpr (WantGradient) near_gradient += triangle_solid_angle_gradient(dvec3(apex), dvec3(a), dvec3(b), dvec3(x));
+    if constexpr (WantGradient)
+      near_gradient += triangle_solid_angle_gradient(dvec3(apex), dvec3(a), dvec3(b), dvec3(x));
   }
 };
 

@@ -10,8 +10,8 @@
 // so the counts are those of an honest ray and w stays consistent.
 #pragma once
 
-#include "gwnrt/geometry/bvh.h"
 #include "gwnrt/field/distance.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 

@@ -14,13 +14,13 @@
 // A closed mesh has no ∂M, so no Harnack steps: the trace is one walk over its crossings.
 #pragma once
 
+#include "gwnrt/field/winding_number.h"
+#include "gwnrt/geometry/model_view.h"
 #include "gwnrt/trace/harnack.h"
 #include "gwnrt/trace/march_regions.h"
-#include "gwnrt/geometry/model_view.h"
 #include "gwnrt/trace/phase.h"
 #include "gwnrt/trace/ray.h"
 #include "gwnrt/trace/trace_types.h"
-#include "gwnrt/field/winding_number.h"
 
 namespace gwnrt {
 
@@ -116,13 +116,13 @@ class SurfaceTracer {
     if (sheets_) {
       // The integer part of w at the start: crossings of the closed M − C since the line entered
       // M's box (which holds C), where w = w_C.
-      const int crossed = box0 < t_start ? crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, box0, t_start) -
-                                               crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, box0, t_start)
-                                         : 0;
+      const int crossed = box0 < t_start
+                              ? crossing_sum(m_.triangles.bvh, m_.triangles.vertices, frame_, box0, t_start) -
+                                    crossing_sum(m_.cone.bvh, m_.cone.vertices, frame_, box0, t_start)
+                              : 0;
       // Outside every region (and on their boundary) |w_C| < δ, so floor(w_C - w*) = -1 - floor(w*)
       // without evaluating it.
-      band_ = start_in_region ? int(floorf(w_start + float(crossed) - o_.level))
-                              : crossed - 1 - int(floorf(o_.level));
+      band_ = start_in_region ? int(floorf(w_start + float(crossed) - o_.level)) : crossed - 1 - int(floorf(o_.level));
       have_next_ = next_crossing(m_.triangles.bvh, m_.triangles.vertices, frame_, t_start, kEmptyLane, t_end_, next_);
     }
     for (int k = 0; k < march_count; ++k) {
@@ -169,7 +169,7 @@ class SurfaceTracer {
       const int band = band_ + next_.jump;
       if ((band_ < 0) != (band < 0)) {
         const uint32_t i = next_.index;
-        const vec3 *v = m_.triangles.vertices + 3 * i;
+        const vec3* v = m_.triangles.vertices + 3 * i;
         vec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
         n /= glm::length(n);
         // Entering {w > w*} the outside is behind the ray, leaving it the outside is ahead.

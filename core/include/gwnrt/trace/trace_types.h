@@ -20,9 +20,9 @@ struct TraceOptions {
   float epsilon = 1e-5f;      // stopping distance, relative to the box diagonal of M
   uint32_t max_steps = 4096;  // Harnack evaluations per ray
   uint32_t max_crossings = 1u << 16;
-  float beta = 2.0f;          // accuracy of the multipole evaluation of φ on the cone
+  float beta = 2.0f;  // accuracy of the multipole evaluation of φ on the cone
   bool overstep = true;
-  bool exact = false;         // φ by the double brute-force sum over the cone (reference, slow)
+  bool exact = false;  // φ by the double brute-force sum over the cone (reference, slow)
 };
 
 enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
@@ -32,12 +32,12 @@ struct RayHit {
   bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
   bool invalid = false;  // rejected input: non-finite numbers or a zero direction
   HitKind kind = HitKind::kNone;
-  float t = kInfinity;   // in units of the ray's own direction
+  float t = kInfinity;  // in units of the ray's own direction
   vec3 position{0.0f};
-  vec3 normal{0.0f};     // unit, outward: from {w > w*} toward {w < w*}
+  vec3 normal{0.0f};               // unit, outward: from {w > w*} toward {w < w*}
   uint32_t triangle = kEmptyLane;  // input index, sheet hits
-  uint32_t steps = 0;      // Harnack evaluations of φ
-  uint32_t crossings = 0;  // triangle crossings walked
+  uint32_t steps = 0;              // Harnack evaluations of φ
+  uint32_t crossings = 0;          // triangle crossings walked
 };
 
 }  // namespace gwnrt
