@@ -5,7 +5,10 @@
 #   bash scripts/check.sh tsan         ThreadSanitizer build of the plugin tests, run
 #   bash scripts/check.sh downstream   install the Release build (build/), build and run
 #                                      tests/downstream against the installed package
-#   bash scripts/check.sh all          all four, in that order
+#   bash scripts/check.sh configs      the other build configurations: Embree and CUDA off with
+#                                      the programs and tests (built and run), and the library
+#                                      alone (no programs, no tests)
+#   bash scripts/check.sh all          all five, in that order
 # Sanitizer builds are RelWithDebInfo: TSan's suppressions name frames inside TBB's headers,
 # which only debug information keeps once they are inlined (a Release build reports ~4200
 # races inside the model build's TBB tasks that RelWithDebInfo attributes and suppresses).
@@ -48,11 +51,22 @@ check_downstream() {
   echo "check downstream: find_package(gwnrt) and every installed target linked"
 }
 
+check_configs() {
+  cmake -S . -B build-noembree -G Ninja -DGWNRT_WITH_EMBREE=OFF -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
+  cmake --build build-noembree --parallel "$jobs"
+  ctest --test-dir build-noembree --output-on-failure --parallel "$jobs"
+  cmake -S . -B build-library -G Ninja -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_BUILD_TESTS=OFF -DGWNRT_WITH_CUDA=OFF \
+    -DGWNRT_WERROR=ON
+  cmake --build build-library --parallel "$jobs"
+  echo "check configs: Embree off (suite run) and the library alone built"
+}
+
 case "${1:-all}" in
   format) check_format ;;
   sanitize) check_sanitize ;;
   tsan) check_tsan ;;
   downstream) check_downstream ;;
-  all) check_format; check_sanitize; check_tsan; check_downstream ;;
-  *) echo "usage: $0 format|sanitize|tsan|downstream|all"; exit 2 ;;
+  configs) check_configs ;;
+  all) check_format; check_sanitize; check_tsan; check_downstream; check_configs ;;
+  *) echo "usage: $0 format|sanitize|tsan|downstream|configs|all"; exit 2 ;;
 esac
