@@ -51,7 +51,7 @@ QueryRequest request_for(int order, bool exact) {
   QueryRequest r;
   r.fields = kAllFields;
   r.taylor.order = order;
-  r.exact = exact;
+  r.method = exact ? WindingMethod::kBrute : WindingMethod::kTaylor;
   return r;
 }
 
@@ -161,8 +161,11 @@ TEST(Batch, RejectsBadRequests) {
   }
   r = QueryRequest{};
   r.taylor.order = 3;
-  r.exact = true;  // exact evaluation ignores the order, but a bad one is still a caller error
-  expect_rejected(r, "order 3 with exact");
+  r.method = WindingMethod::kBrute;  // brute ignores the order, but a bad one is still a caller error
+  expect_rejected(r, "order 3 with brute");
+  r = QueryRequest{};
+  r.method = WindingMethod(7);
+  expect_rejected(r, "method 7");
 
   EXPECT_TRUE(evaluate_points(model, points, QueryRequest{}, results).ok());
   // Nothing to do is not an error.

@@ -142,7 +142,7 @@ QueryRequest sdf_request(uint32_t fields, float level = 0.5f, bool exact = false
   QueryRequest r;
   r.fields = fields;
   r.level = level;
-  r.exact = exact;
+  r.method = exact ? WindingMethod::kBrute : WindingMethod::kTaylor;
   return r;
 }
 
@@ -191,7 +191,7 @@ ClassificationStats check_classification(const GwnModel& model, const Mesh& mesh
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const double r = reference[t];
     const float stored = model.other_winding()[t];
-    EXPECT_EQ(in_tree[t], is_sheet(stored, level, model.sheet_jump()[t]))
+    EXPECT_EQ(in_tree[t], is_sheet(stored, level, model.sheet_jump()[t], model.sheet_side_tolerance()))
         << "triangle " << t << ": the tree disagrees with is_sheet";
     if (std::isnan(r)) {
       EXPECT_TRUE(std::isnan(stored)) << t;
@@ -320,7 +320,7 @@ TEST(Sheets, NestedSpheresSetSheetLevelPicksTheRightShell) {
       test::Random rng(11);
       for (int k = 0; k < 50; ++k) {
         const vec3 x = rng.unit() * rng.uniform(0.5f, 1.2f);
-        const SignedDistance s = signed_distance(v, x, c.level, TaylorOptions{});
+        const SignedDistance s = signed_distance(v, x, c.level, WindingOptions{});
         // Tolerance: the chord sag of that sphere (chord_sag: 4.5e-3 at radius 1) plus float.
         EXPECT_NEAR(s.distance, glm::length(x) - radius, sag + 1e-6) << "level " << c.level << " x " << str(x);
         EXPECT_EQ(s.piece, DistancePiece::kSheet);
@@ -399,7 +399,7 @@ TEST(Sheets, CoincidentDuplicateSoupIsSheetAtEveryLevelItCuts) {
     float worst = 0;
     for (int k = 0; k < 200; ++k) {
       const vec3 x = rng.unit() * rng.uniform(0.9f, 1.1f);
-      const float sdf = signed_distance(model.view(), x, level, TaylorOptions{}).distance;
+      const float sdf = signed_distance(model.view(), x, level, WindingOptions{}).distance;
       EXPECT_NEAR(sdf, glm::length(x) - 1.0f, 5e-3f) << "level " << level << " x " << str(x);
       worst = std::max(worst, std::fabs(sdf - (glm::length(x) - 1.0f)));
     }

@@ -31,6 +31,9 @@ Status parallel_map(const char* name, const char* items, const char* slots, std:
 }  // namespace
 
 Status validate_request(const QueryRequest& request, const ModelView* view) {
+  if (uint32_t(request.method) >= kWindingMethodCount)
+    return {StatusCode::kInvalidArgument, "winding method must be auto, crossing, taylor or brute, got the value " +
+                                              std::to_string(uint32_t(request.method))};
   if (request.taylor.order < 0 || request.taylor.order > 2)
     return {StatusCode::kInvalidArgument,
             "Taylor order must be 0, 1 or 2, got " + std::to_string(request.taylor.order)};

@@ -1,16 +1,20 @@
-// gwnrt-bench-query: BVH build time and query throughput on one mesh, each mode reported as a
-// ratio to the brute-force exact sum measured in the same run, on the same point mix.
+// gwnrt-bench-query: BVH build time, sheet classification time and query throughput on one mesh,
+// each mode reported as a ratio to the brute-force exact sum measured in the same run, on the same
+// point mix; --json writes every row for other programs.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "gwnrt/batch.h"
+#include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
@@ -28,8 +32,18 @@ struct Row {
   std::string mode;
   size_t points;
   double seconds;
+  double max_error = NAN;  // of w against the brute force, where the mode gives w
   double rate() const { return double(points) / seconds; }
 };
+
+// Sheet classification alone, by one method: a model built with it, less the tree it shares.
+double sheet_seconds(const Mesh& mesh, WindingMethod method) {
+  BuildOptions options;
+  options.sheet_method = method;
+  GwnModel model;
+  if (Status s = GwnModel::build(mesh, model, options); !s.ok()) examples::die(kProgram, s.message());
+  return model.timings().sheet_seconds;
+}
 
 double time_batch(const GwnModel& model, const std::vector<vec3>& points, const QueryRequest& request,
                   std::vector<PointResult>& results) {
@@ -58,6 +72,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "random seed of the point mix");
+  std::string json_path;
+  app.add_option("--json", json_path, "also write every row and the build timings to this JSON file");
   CLI11_PARSE(app, argc, argv);
 
   const examples::ThreadLimit limit(threads);
@@ -70,8 +86,12 @@ int main(int argc, char** argv) {
   const double load_sec = std::chrono::duration<double>(clock_type::now() - tl).count();
   Aabb box;
   for (const vec3& p : mesh.positions) box.extend(p);
+  const double sheets_by_crossing = sheet_seconds(mesh, WindingMethod::kCrossing);
+  const double sheets_by_taylor = sheet_seconds(mesh, WindingMethod::kTaylor);
   GwnModel model;
   if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) return examples::fail(kProgram, s.message());
+  const ModelView view = model.view();
+  const WindingMethod auto_method = resolve_winding_method(view, WindingMethod::kAuto);
   const size_t tris = model.mesh().triangles.size();
   std::printf("mesh            %s\n", mesh_path.c_str());
   std::printf("triangles       %zu (%zu degenerate), boundary segments %zu\n", tris, report.degenerate_triangles,
@@ -81,16 +101,21 @@ int main(int argc, char** argv) {
   std::printf("tree + moments  %.3f s   (%zu nodes, depth %u)\n", model.timings().tree_seconds,
               model.triangle_tree().bvh.nodes.size(), model.triangle_tree().bvh.depth);
   std::printf("boundary + tree %.3f s\n", model.timings().boundary_seconds);
-  std::printf("sheets          %.3f s   (%u of %zu triangles are sheets for w* = %g)\n\n",
+  std::printf("sheets          %.3f s   (%u of %zu triangles are sheets for w* = %g; by %s)\n",
               model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, tris,
-              double(model.sheet_level()));
+              double(model.sheet_level()), winding_method_name(model.sheet_method()));
+  std::printf("sheets by crossing %.3f s (%.2fx the tree build), by taylor %.3f s (%.2fx)\n", sheets_by_crossing,
+              sheets_by_crossing / model.timings().tree_seconds, sheets_by_taylor,
+              sheets_by_taylor / model.timings().tree_seconds);
+  std::printf("auto method     %s (%u cone triangles for %u triangles)\n\n", winding_method_name(auto_method),
+              view.cone.triangle_count, view.triangles.triangle_count);
 
   const std::vector<vec3> points = point_mix(box, count, seed);
   std::vector<PointResult> results, reference;
 
   // Brute force: grow the subset until it fills the time budget (its cost is O(n) per point).
   QueryRequest brute;
-  brute.exact = true;
+  brute.method = WindingMethod::kBrute;
   size_t brute_count = std::max<size_t>(4, size_t(workers) * 2);
   double brute_sec = 0;
   for (;;) {
@@ -102,50 +127,105 @@ int main(int argc, char** argv) {
   }
   const size_t brute_n = reference.size();
   std::vector<Row> rows;
-  rows.push_back({"exact (brute force, double)", brute_n, brute_sec});
+  rows.push_back({"exact (brute force, double)", brute_n, brute_sec, 0.0});
 
   struct Mode {
     const char* name;
+    WindingMethod method;
     int order;
     uint32_t fields;
   };
-  const Mode modes[] = {{"w, Taylor order 0", 0, kFieldW},
-                        {"w, Taylor order 1", 1, kFieldW},
-                        {"w, Taylor order 2", 2, kFieldW},
-                        {"w + grad, order 2", 2, kFieldW | kFieldGradient},
-                        {"w + grad + Hessian, order 2", 2, kFieldW | kFieldGradient | kFieldHessian},
-                        {"unsigned distance", 2, kFieldUnsignedDistance},
-                        {"boundary distance", 2, kFieldBoundaryDistance},
-                        {"signed distance (sdf)", 2, kFieldSignedDistance},
-                        {"pseudo-SDF (sdf1, sdf2)", 2, kFieldPseudoDistance},
-                        {"sheet distance", 2, kFieldSheetDistance},
-                        {"Harnack lower bound", 2, kFieldHarnackBound},
-                        {"Newton projection", 2, kFieldProjection}};
-  std::vector<double> max_err;
+  constexpr uint32_t kAllDerivatives = kFieldW | kFieldGradient | kFieldHessian;
+  const Mode modes[] = {{"w, Taylor order 0", WindingMethod::kTaylor, 0, kFieldW},
+                        {"w, Taylor order 1", WindingMethod::kTaylor, 1, kFieldW},
+                        {"w, Taylor order 2", WindingMethod::kTaylor, 2, kFieldW},
+                        {"w + grad, order 2", WindingMethod::kTaylor, 2, kFieldW | kFieldGradient},
+                        {"w + grad + Hessian, order 2", WindingMethod::kTaylor, 2, kAllDerivatives},
+                        {"w, crossing", WindingMethod::kCrossing, 2, kFieldW},
+                        {"w + grad + Hessian, crossing", WindingMethod::kCrossing, 2, kAllDerivatives},
+                        {"unsigned distance", WindingMethod::kAuto, 2, kFieldUnsignedDistance},
+                        {"boundary distance", WindingMethod::kAuto, 2, kFieldBoundaryDistance},
+                        {"signed distance (sdf), auto", WindingMethod::kAuto, 2, kFieldSignedDistance},
+                        {"pseudo-SDF (sdf1, sdf2), auto", WindingMethod::kAuto, 2, kFieldPseudoDistance},
+                        {"sheet distance", WindingMethod::kAuto, 2, kFieldSheetDistance},
+                        {"Harnack lower bound", WindingMethod::kAuto, 2, kFieldHarnackBound},
+                        {"Newton projection, auto", WindingMethod::kAuto, 2, kFieldProjection}};
   for (const Mode& m : modes) {
     QueryRequest request;
+    request.method = m.method;
     request.taylor = {m.order, beta};
     request.fields = m.fields;
     const double sec = time_batch(model, points, request, results);
-    rows.push_back({m.name, points.size(), sec});
-    double err = 0;
-    if (m.fields & kFieldW)
-      for (size_t i = 0; i < brute_n; ++i) err = std::max(err, double(std::abs(results[i].w - reference[i].w)));
-    max_err.push_back(m.fields & kFieldW ? err : NAN);
+    Row row{m.name, points.size(), sec};
+    if (m.fields & kFieldW) {
+      row.max_error = 0;
+      for (size_t i = 0; i < brute_n; ++i)
+        row.max_error = std::max(row.max_error, double(std::abs(results[i].w - reference[i].w)));
+    }
+    rows.push_back(row);
   }
+  auto rate_of = [&](const char* mode) -> double {
+    for (const Row& r : rows)
+      if (r.mode == mode) return r.rate();
+    return NAN;
+  };
 
   const double base = rows[0].rate();
   std::printf("%-30s %10s %14s %12s %14s\n", "mode", "points", "queries/s", "x brute", "max |dw|");
-  for (size_t i = 0; i < rows.size(); ++i) {
-    std::printf("%-30s %10zu %14.4g %12.4g", rows[i].mode.c_str(), rows[i].points, rows[i].rate(),
-                rows[i].rate() / base);
-    if (i > 0 && !std::isnan(max_err[i - 1])) std::printf(" %14.3g", max_err[i - 1]);
+  for (const Row& r : rows) {
+    std::printf("%-30s %10zu %14.4g %12.4g", r.mode.c_str(), r.points, r.rate(), r.rate() / base);
+    if (!std::isnan(r.max_error) && &r != &rows[0]) std::printf(" %14.3g", r.max_error);
     std::printf("\n");
   }
-  const double w1 = rows[2].rate(), w2 = rows[3].rate(), wgh = rows[5].rate(), sdf = rows[8].rate();
+  const double w2 = rate_of("w, Taylor order 2");
   std::printf("\nw+grad+H / w (order 2): %.3f   order-1 w / brute force: %.4g   order-2 w / brute force: %.4g\n",
-              wgh / w2, w1 / base, w2 / base);
-  std::printf("sdf / w (order 2): %.3f (target >= 0.3)\n", sdf / w2);
+              rate_of("w + grad + Hessian, order 2") / w2, rate_of("w, Taylor order 1") / base, w2 / base);
+  std::printf("crossing w / order-2 w: %.3f   crossing w / brute force: %.4g\n", rate_of("w, crossing") / w2,
+              rate_of("w, crossing") / base);
+  std::printf("sdf / w (order 2): %.3f (target >= 0.3)\n", rate_of("signed distance (sdf), auto") / w2);
   std::printf("(max |dw| is over the %zu brute-force points, beta = %g)\n", brute_n, beta);
+
+  // Where the crossing method's time goes, per query, over (up to) the first 100k points.
+  CrossingStats stats;
+  const size_t sampled = std::min<size_t>(points.size(), 100000);
+  for (size_t i = 0; i < sampled; ++i) (void)winding_number_crossing<false, false>(view, points[i], kConeBeta, &stats);
+  const double per = 1.0 / double(sampled);
+  std::printf(
+      "crossing w per query: %.3f crossings of M, %.3f of the cone, %.2f exact cone triangles, %.2f cone "
+      "clusters expanded\n",
+      stats.mesh_crossings * per, stats.cone_crossings * per, stats.cone_near * per, stats.cone_far * per);
+
+  if (!json_path.empty()) {
+    nlohmann::json out;
+    out["mesh"] = mesh_path;
+    out["triangles"] = tris;
+    out["boundary_segments"] = model.boundary().segment_count();
+    out["cone_triangles"] = view.cone.triangle_count;
+    out["threads"] = workers;
+    out["beta"] = beta;
+    out["auto_method"] = winding_method_name(auto_method);
+    out["build"] = {{"load_seconds", load_sec},
+                    {"tree_seconds", model.timings().tree_seconds},
+                    {"boundary_seconds", model.timings().boundary_seconds},
+                    {"sheet_seconds", model.timings().sheet_seconds},
+                    {"sheet_method", winding_method_name(model.sheet_method())},
+                    {"sheet_crossing_seconds", sheets_by_crossing},
+                    {"sheet_taylor_seconds", sheets_by_taylor}};
+    out["crossing_per_query"] = {{"mesh_crossings", stats.mesh_crossings * per},
+                                 {"cone_crossings", stats.cone_crossings * per},
+                                 {"cone_exact_triangles", stats.cone_near * per},
+                                 {"cone_clusters_expanded", stats.cone_far * per}};
+    nlohmann::json table = nlohmann::json::array();
+    for (const Row& r : rows)
+      table.push_back({{"mode", r.mode},
+                       {"points", r.points},
+                       {"queries_per_second", r.rate()},
+                       {"ratio_to_brute_force", r.rate() / base},
+                       {"max_abs_error", std::isnan(r.max_error) ? nlohmann::json() : nlohmann::json(r.max_error)}});
+    out["rows"] = table;
+    std::ofstream file(json_path);
+    file << out.dump(2) << "\n";
+    if (!file) return examples::fail(kProgram, json_path + ": cannot write");
+  }
   return 0;
 }

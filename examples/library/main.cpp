@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // Bulk queries: w and ∇w, Taylor order 2 at β = 2 (QueryRequest's defaults).
+  // Bulk queries: w and ∇w by QueryRequest's default method, auto (here exact by crossings).
   const std::vector<gwnrt::vec3> points = {model.bounds().centre(), model.bounds().hi * 2.0f};
   gwnrt::QueryRequest request;
   request.fields = gwnrt::kFieldW | gwnrt::kFieldGradient;

@@ -166,6 +166,7 @@ int main(int argc, char** argv) {
   int order = 2;
   float beta = 2.0f;
   bool exact = false;
+  std::string method_name = "auto";
   float level = 0.5f;
   unsigned newton_iterations = gwnrt::NewtonOptions{}.max_iterations;
   float newton_tolerance = gwnrt::NewtonOptions{}.tolerance;
@@ -201,9 +202,15 @@ int main(int argc, char** argv) {
             return std::string();
           },
           "BETA > 0"));
-  app.add_flag(
-      "--exact", exact,
-      "Brute-force double-precision reference instead of the tree (w, grad, hess, sdf1, sdf2; the sdf's w too)");
+  CLI::Option* method_option =
+      app.add_option("--method", method_name,
+                     "How w, grad and hess are evaluated (and the sdf's sign, sdf1, sdf2, proj): crossing (exact: "
+                     "signed ray crossings plus the boundary cone), taylor (the multipole tree, --order and --beta), "
+                     "brute (double brute-force sum, the reference), auto (crossing when the mesh's boundary is "
+                     "small, else taylor)")
+          ->capture_default_str()
+          ->check(CLI::IsMember({"auto", "crossing", "taylor", "brute"}));
+  app.add_flag("--exact", exact, "The same as --method brute")->excludes(method_option);
   app.add_option("--level", level, "Level w*: S = boundary of {w > w*} (sdf, sdf1, sdf2, sheet_dist, proj, hbound)")
       ->capture_default_str()
       ->check(CLI::Validator(
@@ -247,7 +254,10 @@ int main(int argc, char** argv) {
   request.fields = fields;
   request.taylor.order = order;
   request.taylor.beta = beta;
-  request.exact = exact;
+  request.method = exact || method_name == "brute" ? gwnrt::WindingMethod::kBrute
+                   : method_name == "crossing"     ? gwnrt::WindingMethod::kCrossing
+                   : method_name == "taylor"       ? gwnrt::WindingMethod::kTaylor
+                                                   : gwnrt::WindingMethod::kAuto;
   request.level = level;
   request.newton.max_iterations = newton_iterations;
   request.newton.tolerance = newton_tolerance;
@@ -288,6 +298,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s, sheets %.3f s: %u of %zu triangles)\n",
                  kProgram, build_seconds, model.timings().tree_seconds, model.timings().boundary_seconds,
                  model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, report.triangle_count);
+    std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
+                 gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
+                 exact ? "brute" : method_name.c_str());
   }
 
   std::vector<vec3> points;

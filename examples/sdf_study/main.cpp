@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
       exact_other[k] = w_other;
       diff[k] = std::fabs(w_other - double(other[t]));
       straddles[k] = straddle;
-      if (straddle == is_sheet(other[t], level, model.sheet_jump()[t])) {
+      if (straddle == is_sheet(other[t], level, model.sheet_jump()[t], model.sheet_side_tolerance())) {
         verdict[k] = 0;
       } else {
         // Within the tree's error of |w_o − w*| = 1/2 the stored value may honestly fall either side.

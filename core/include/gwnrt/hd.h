@@ -95,6 +95,32 @@ GWNRT_HD inline float power_of_two_scale(float m) {
   return bits_float(0x7f000000u - exponent);
 }
 
+// The same for doubles: 2^-e for the binary exponent e of m > 0 (huge m saturate at 2^-1022,
+// zero or subnormal m get 2^1023).
+GWNRT_HD inline double power_of_two_scale(double m) {
+#if defined(__CUDA_ARCH__)
+  uint64_t exponent = uint64_t(__double_as_longlong(m)) & 0x7ff0000000000000ull;
+#else
+  uint64_t exponent = __builtin_bit_cast(uint64_t, m) & 0x7ff0000000000000ull;
+#endif
+  exponent = exponent > 0x7fd0000000000000ull ? 0x7fd0000000000000ull : exponent;
+  const uint64_t bits = 0x7fe0000000000000ull - exponent;
+#if defined(__CUDA_ARCH__)
+  return __longlong_as_double((long long)bits);
+#else
+  return __builtin_bit_cast(double, bits);
+#endif
+}
+
+// The index of the lowest set bit of a nonzero mask.
+GWNRT_HD GWNRT_FORCEINLINE int lowest_set_bit(uint32_t mask) {
+#if defined(__CUDA_ARCH__)
+  return __ffs(int(mask)) - 1;
+#else
+  return __builtin_ctz(mask);
+#endif
+}
+
 GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinity && x != -kInfinity; }
 
 }  // namespace gwnrt

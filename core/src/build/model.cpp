@@ -73,6 +73,9 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
       options.max_leaf_segments > kMaxLeafSize)
     return {StatusCode::kInvalidArgument, "BuildOptions: max_leaf_triangles and max_leaf_segments must lie in [1, " +
                                               std::to_string(kMaxLeafSize) + "]"};
+  if (uint32_t(options.sheet_method) >= kWindingMethodCount || options.sheet_method == WindingMethod::kBrute)
+    return {StatusCode::kInvalidArgument,
+            "BuildOptions: sheet_method must be auto, crossing or taylor (brute would sum n² terms)"};
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
   using clock = std::chrono::steady_clock;
   GwnModel model;
@@ -108,6 +111,7 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
   model.surface_margin_ = float(1.01 * std::sqrt(area / (2 * kPi)));
   auto t2 = clock::now();
   model.max_leaf_triangles_ = options.max_leaf_triangles;
+  model.sheet_method_ = resolve_winding_method(model.view(), options.sheet_method);
   if (options.classify_sheets) {
     if (Status s = model.set_sheet_level(options.sheet_level); !s.ok()) return s;
   }
@@ -125,29 +129,37 @@ Status GwnModel::set_sheet_level(float level) {
 
 Status GwnModel::set_sheet_level_unguarded(float level) {
   if (!std::isfinite(level)) return {StatusCode::kInvalidArgument, "sheet level must be a finite number"};
-  if (other_winding_.empty()) {  // the first classification: the coarse pass over all triangles
-    const size_t n = triangles_.triangle_ids.size();
-    std::vector<uint32_t> leaves(n);
-    for (uint32_t i = 0; i < n; ++i) leaves[i] = i;
-    other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
-    sheet_jump_.assign(mesh_.triangles.size(), 0);
-    other_winding_refined_.assign(mesh_.triangles.size(), 0);
-    other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, other_winding_, sheet_jump_);
-  }
-  std::vector<uint32_t> ambiguous;  // leaf order: a side within kSheetAmbiguity of the level
-  for (uint32_t i = 0; i < triangles_.triangle_ids.size(); ++i) {
-    const uint32_t t = triangles_.triangle_ids[i];
-    const float half = 0.5f * float(std::abs(int(sheet_jump_[t])));
-    if (!other_winding_refined_[t] && (fabsf(other_winding_[t] - half - level) < kSheetAmbiguity ||
-                                       fabsf(other_winding_[t] + half - level) < kSheetAmbiguity)) {
-      ambiguous.push_back(i);
-      other_winding_refined_[t] = 1;
+  if (sheet_method_ == WindingMethod::kCrossing) {
+    if (other_winding_.empty()) {  // exact, once for every level
+      other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
+      sheet_jump_.assign(mesh_.triangles.size(), 0);
+      other_triangles_winding_by_crossings(view(), other_winding_, sheet_jump_);
     }
+  } else {
+    if (other_winding_.empty()) {  // the first classification: the coarse pass over all triangles
+      const size_t n = triangles_.triangle_ids.size();
+      std::vector<uint32_t> leaves(n);
+      for (uint32_t i = 0; i < n; ++i) leaves[i] = i;
+      other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
+      sheet_jump_.assign(mesh_.triangles.size(), 0);
+      other_winding_refined_.assign(mesh_.triangles.size(), 0);
+      other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, other_winding_, sheet_jump_);
+    }
+    std::vector<uint32_t> ambiguous;  // leaf order: a side within kSheetAmbiguity of the level
+    for (uint32_t i = 0; i < triangles_.triangle_ids.size(); ++i) {
+      const uint32_t t = triangles_.triangle_ids[i];
+      const float half = 0.5f * float(std::abs(int(sheet_jump_[t])));
+      if (!other_winding_refined_[t] && (fabsf(other_winding_[t] - half - level) < kSheetAmbiguity ||
+                                         fabsf(other_winding_[t] + half - level) < kSheetAmbiguity)) {
+        ambiguous.push_back(i);
+        other_winding_refined_[t] = 1;
+      }
+    }
+    other_triangles_winding(triangles_, ambiguous, kSheetBetaFine, other_winding_, sheet_jump_);
   }
-  other_triangles_winding(triangles_, ambiguous, kSheetBetaFine, other_winding_, sheet_jump_);
   std::vector<uint32_t> sheets;
   for (uint32_t t = 0; t < other_winding_.size(); ++t)
-    if (is_sheet(other_winding_[t], level, sheet_jump_[t])) sheets.push_back(t);
+    if (is_sheet(other_winding_[t], level, sheet_jump_[t], sheet_side_tolerance())) sheets.push_back(t);
   if (Status s = build_triangle_tree(mesh_, sheets, max_leaf_triangles_, sheets_); !s.ok()) return s;
   sheet_level_ = level;
   return Status::Ok();

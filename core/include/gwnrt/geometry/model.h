@@ -7,11 +7,13 @@
 #include <span>
 #include <vector>
 
+#include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/boundary.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/segment_tree.h"
 #include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/sdf/sheets.h"
 #include "gwnrt/status.h"
 
 namespace gwnrt {
@@ -22,12 +24,15 @@ inline constexpr uint32_t kMaxLeafSize = 64;
 struct BuildOptions {
   uint32_t max_leaf_triangles = 4;
   uint32_t max_leaf_segments = 4;
-  // Classify the sheets for w* = sheet_level at build (set_sheet_level changes the level later).
-  // It costs about what ten tree builds do (a w evaluation at every centroid; 2 s for 871k
-  // triangles on 2 cores): a model only traced (the Embree plugin) can skip it, and then
-  // refuses the sdf and sheet-distance queries.
+  // Classify the sheets for w* = sheet_level at build (set_sheet_level changes the level later):
+  // w at every centroid. A model only traced (the Embree plugin) can skip it, and then refuses
+  // the sdf and sheet-distance queries.
   bool classify_sheets = true;
   float sheet_level = 0.5f;
+  // How the centroids' w is evaluated: crossing (exact; for the 871k dragon on 2 cores about the
+  // tree build's time), taylor (the multipole tree, two passes, about ten tree builds; decided
+  // within kSheetSideTolerance), or auto (resolve_winding_method). brute is refused (n² terms).
+  WindingMethod sheet_method = WindingMethod::kAuto;
 };
 
 struct BuildTimings {
@@ -58,6 +63,10 @@ class GwnModel {
   // the sheets were not classified).
   std::span<const float> other_winding() const { return other_winding_; }
   std::span<const int8_t> sheet_jump() const { return sheet_jump_; }  // k per input triangle (is_sheet)
+  // How other_winding() was evaluated (crossing or taylor), and the side tolerance is_sheet was
+  // given for it (0 for the exact crossings).
+  WindingMethod sheet_method() const { return sheet_method_; }
+  float sheet_side_tolerance() const { return sheet_method_ == WindingMethod::kCrossing ? 0.0f : kSheetSideTolerance; }
   const TriangleTree& sheet_tree() const { return sheets_; }
   float sheet_level() const { return sheet_level_; }
   // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
@@ -86,6 +95,7 @@ class GwnModel {
   std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
   TriangleTree sheets_;
   float sheet_level_ = __builtin_nanf("");
+  WindingMethod sheet_method_ = WindingMethod::kAuto;  // resolved at build
   uint32_t max_leaf_triangles_ = 4;
   BuildTimings timings_;
 };

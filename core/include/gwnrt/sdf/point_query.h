@@ -3,7 +3,7 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
-#include "gwnrt/field/winding_number.h"
+#include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/sdf/signed_distance.h"
 
@@ -27,9 +27,11 @@ inline constexpr uint32_t kSheetFields = kFieldSignedDistance | kFieldSheetDista
 
 struct QueryRequest {
   uint32_t fields = kFieldW;
-  TaylorOptions taylor;
-  bool exact = false;  // brute-force double sum instead of the tree (w, ∇w, H_w, the pseudo-SDF, sdf's w)
-  float level = 0.5f;  // w*: S = ∂{w > w*}
+  // How w, ∇w and H_w are evaluated, for every field that needs them (the pseudo-SDF, the sdf's
+  // sign and smooth estimate, the Newton projection): field/evaluate_winding.h.
+  WindingMethod method = WindingMethod::kAuto;
+  TaylorOptions taylor;  // the tree's order and beta (method taylor; beta also for ρ's cone sum)
+  float level = 0.5f;    // w*: S = ∂{w > w*}
   NewtonOptions newton;
 };
 
@@ -53,27 +55,20 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
   const bool want_gradient = want_pseudo || (request.fields & kFieldGradient);
   const bool want_hessian = want_pseudo || (request.fields & kFieldHessian);
   const bool want_sdf = request.fields & kFieldSignedDistance;
-  // The exact mode's sdf takes w, ∇w and H_w from the exact sum; otherwise sdf evaluates them
-  // itself, only as far as it needs (mostly w alone), unless they are taken anyway.
-  const bool full = want_hessian || (request.exact && want_sdf);
+  const WindingOptions winding{resolve_winding_method(model, request.method), request.taylor};
+  // The brute-force sdf takes w, ∇w and H_w from one sum; otherwise sdf evaluates them itself,
+  // only as far as it needs (mostly w alone), unless they are taken anyway.
+  const bool full = want_hessian || (winding.method == WindingMethod::kBrute && want_sdf);
   const bool want_sample = full || (request.fields & (kFieldW | kFieldGradient));
   if (want_sample) {
-    if (request.exact) {
-      const WindingSampleExact s = winding_number_exact(model.triangles, x, want_gradient || full, full);
-      r.w = float(s.w);
-      r.gradient = vec3(s.gradient);
-      r.hessian = {float(s.hessian.xx), float(s.hessian.xy), float(s.hessian.xz),
-                   float(s.hessian.yy), float(s.hessian.yz), float(s.hessian.zz)};
-    } else {
-      const WindingSample s = winding_number(model.triangles, x, request.taylor, want_gradient || full, full);
-      r.w = s.w;
-      r.gradient = s.gradient;
-      r.hessian = s.hessian;
-    }
+    const WindingSample s = evaluate_winding(model, x, winding, want_gradient || full, full);
+    r.w = s.w;
+    r.gradient = s.gradient;
+    r.hessian = s.hessian;
   }
   const WindingSample sample{r.w, r.gradient, r.hessian};
   if (want_sdf) {
-    r.sdf = signed_distance(model, x, request.level, request.taylor, full ? &sample : nullptr);  // also d₁, d₂
+    r.sdf = signed_distance(model, x, request.level, winding, full ? &sample : nullptr);  // also d₁, d₂
   } else {
     if (request.fields & kFieldSheetDistance) {
       const NearestPrimitive n = unsigned_distance(model.sheets, x);
@@ -86,7 +81,7 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
     }
   }
   if (request.fields & kFieldProjection)
-    r.projection = project_onto_surface(model, x, request.level, request.taylor, request.newton);
+    r.projection = project_onto_surface(model, x, request.level, winding, request.newton);
   if (request.fields & kFieldUnsignedDistance) {
     const NearestPrimitive n = unsigned_distance(model.triangles, x);
     r.unsigned_distance = n.distance;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 
+#include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/triangle_tree.h"
 #include "gwnrt/hd.h"
 
@@ -21,15 +22,21 @@ namespace gwnrt {
 // out[input index] and jump[input index].
 void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
                              std::span<float> out, std::span<int8_t> jump);
-// Sides within this of w* count as equal to it (the stored w_o is that accurate near the
+// The same, exactly, by crossings (field/crossing_winding.h) at every triangle of view.triangles:
+// from the centroid, an axis ray that crosses the triangle at a slope of at most √3; the
+// crossings within round-off of the centroid are the triangle's stack, the rest and the cone
+// give w just past it.
+void other_triangles_winding_by_crossings(const ModelView& view, std::span<float> out, std::span<int8_t> jump);
+// Sides within this of w* count as equal to it, for the multipole's w_o (that accurate near the
 // threshold): then {w > w*} holds on the upper side only when it is really above, so a closed
-// mesh is all sheets for w* = 0 and none for w* = 1, not a coin toss.
+// mesh is all sheets for w* = 0 and none for w* = 1, not a coin toss. Exact values (crossings)
+// need no band: tolerance 0.
 inline constexpr float kSheetSideTolerance = 1e-3f;
 // The sides lo = w_o − |k|/2 and hi = w_o + |k|/2 straddle w*: lo <= w* < hi. False for NaN
 // (zero-area triangles) and k = 0.
-GWNRT_HD inline bool is_sheet(float other_winding, float level, int jump = 1) {
+GWNRT_HD inline bool is_sheet(float other_winding, float level, int jump = 1, float tolerance = kSheetSideTolerance) {
   const float half = 0.5f * float(jump < 0 ? -jump : jump);
-  const float at = level + kSheetSideTolerance;
+  const float at = level + tolerance;
   return jump != 0 && other_winding - half <= at && other_winding + half > at;
 }
 

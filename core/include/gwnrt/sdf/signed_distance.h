@@ -5,7 +5,7 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
-#include "gwnrt/field/winding_number.h"
+#include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/trace/harnack.h"
 #include "gwnrt/trace/phase.h"
@@ -65,13 +65,13 @@ struct SurfaceProjection {
 // the region where S can be) instead of returning a point off S as if it were on it; `point` is
 // then the last iterate.
 GWNRT_HD inline SurfaceProjection project_onto_surface(const ModelView& m, const vec3& start, float level,
-                                                       const TaylorOptions& taylor, const NewtonOptions& options) {
+                                                       const WindingOptions& winding, const NewtonOptions& options) {
   SurfaceProjection out;
   out.point = start;
   // A closed mesh has no smooth pieces (w is a whole number off M): nothing to project onto;
   // Newton would only follow the expansion's round-off gradient.
   if (m.cone.triangle_count == 0) {
-    out.residual = winding_number(m.triangles, start, taylor).w - level;
+    out.residual = evaluate_winding(m, start, winding).w - level;
     out.converged = fabsf(out.residual) <= options.tolerance;
     return out;
   }
@@ -83,7 +83,7 @@ GWNRT_HD inline SurfaceProjection project_onto_surface(const ModelView& m, const
   const vec3 lo = m.bounds.lo - margin, hi = m.bounds.hi + margin;
   vec3 x = start;
   for (uint32_t it = 0;; ++it) {
-    const WindingSample s = winding_number(m.triangles, x, taylor, true, false);
+    const WindingSample s = evaluate_winding(m, x, winding, true, false);
     out.point = x;
     out.iterations = it;
     out.residual = s.w - level;
@@ -187,7 +187,7 @@ struct SignedDistance {
 // they are evaluated here, only as far as needed: w alone, then ∇w, then H_w (a second
 // traversal, where d₂ must compete: rare, as smooth pieces win only close to them).
 GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x, float level,
-                                               const TaylorOptions& taylor, const WindingSample* sample = nullptr) {
+                                               const WindingOptions& winding, const WindingSample* sample = nullptr) {
   SignedDistance out;
   const NearestPrimitive sheet = unsigned_distance(m.sheets, x);
   out.sheet_distance = sheet.distance;
@@ -197,19 +197,19 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
     out.first_order = pseudo_distance(sample->w, sample->gradient, level);
     out.second_order = curvature_corrected_distance(sample->w, sample->gradient, sample->hessian, level);
   }
-  if (level_set_distance_bound(m, x, level, taylor.beta, sheet.distance) >= sheet.distance) {
+  if (level_set_distance_bound(m, x, level, winding.taylor.beta, sheet.distance) >= sheet.distance) {
     // Whatever the caller already has, the answer here is the sheet distance.
-    const float w = sample ? sample->w : winding_number(m.triangles, x, taylor).w;
+    const float w = sample ? sample->w : evaluate_winding(m, x, winding).w;
     out.distance = copysignf(sheet.distance, level - w);
     return out;
   }
   // w and ∇w first: d₁ decides whether d₂, and so H_w, is needed at all.
-  WindingSample s = sample ? *sample : winding_number(m.triangles, x, taylor, true, false);
+  WindingSample s = sample ? *sample : evaluate_winding(m, x, winding, true, false);
   if (!sample) out.first_order = pseudo_distance(s.w, s.gradient, level);
   float best = sheet.distance;
   if (fabsf(out.first_order) < 2.0f * sheet.distance) {
     if (!sample) {
-      s = winding_number(m.triangles, x, taylor, true, true);
+      s = evaluate_winding(m, x, winding, true, true);
       out.second_order = curvature_corrected_distance(s.w, s.gradient, s.hessian, level);
     }
     const float smooth = fabsf(out.second_order);
@@ -218,7 +218,7 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
       out.piece = DistancePiece::kSmooth;
       const float mesh_distance = unsigned_distance(m.triangles, x).distance;
       if (best < mesh_distance) {
-        const float rho = harnack_lower_bound(m, x, level, taylor.beta, mesh_distance);
+        const float rho = harnack_lower_bound(m, x, level, winding.taylor.beta, mesh_distance);
         if (rho > best) {
           best = rho;
           out.piece = DistancePiece::kHarnackBound;

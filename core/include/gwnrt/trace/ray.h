@@ -80,12 +80,16 @@ GWNRT_HD GWNRT_FORCEINLINE int edge_sign(float px, float py, float qx, float qy,
 // (any t, also negative), and the jump of w there: +1 when the line passes from the side the
 // normal (p1-p0)×(p2-p0) points to onto the other side, -1 the other way. Edge-on and
 // zero-area triangles are never crossed (they carry no jump of w).
+// AxisAligned: the frame's ray runs along an axis (sx = sy = 0), and the shear, which would
+// subtract exact zeros, is skipped: the same answers for less work.
+template <bool AxisAligned = false>
 GWNRT_HD GWNRT_FORCEINLINE bool triangle_crossing(const RayFrame& f, const vec3& p0, const vec3& p1, const vec3& p2,
                                                   float& t, int& jump) {
   const vec3 a = p0 - f.origin, b = p1 - f.origin, c = p2 - f.origin;
-  const float ax = a[f.kx] - f.sx * a[f.kz], ay = a[f.ky] - f.sy * a[f.kz];
-  const float bx = b[f.kx] - f.sx * b[f.kz], by = b[f.ky] - f.sy * b[f.kz];
-  const float cx = c[f.kx] - f.sx * c[f.kz], cy = c[f.ky] - f.sy * c[f.kz];
+  const float sx = AxisAligned ? 0.0f : f.sx, sy = AxisAligned ? 0.0f : f.sy;
+  const float ax = AxisAligned ? a[f.kx] : a[f.kx] - sx * a[f.kz], ay = AxisAligned ? a[f.ky] : a[f.ky] - sy * a[f.kz];
+  const float bx = AxisAligned ? b[f.kx] : b[f.kx] - sx * b[f.kz], by = AxisAligned ? b[f.ky] : b[f.ky] - sy * b[f.kz];
+  const float cx = AxisAligned ? c[f.kx] : c[f.kx] - sx * c[f.kz], cy = AxisAligned ? c[f.ky] : c[f.ky] - sy * c[f.kz];
   // Most triangles a ray is tested against are missed by a clear margin: the three signs are
   // combined without branches, and only an exact zero (the ray through an edge's line) takes
   // the symbolic tie-break.
@@ -211,6 +215,83 @@ GWNRT_HD inline int crossing_sum(const BvhView& bvh, const vec3* vertices, const
     }
   }
   return sum;
+}
+
+// Rays along a coordinate axis (direction ±e_kz, a frame from make_ray_frame with sx = sy = 0):
+// what the exact winding number (field/crossing_winding.h) casts from each point. A lane's box
+// is met by the half-line t >= t_min exactly when the origin lies in the box's kx and ky ranges
+// and the box reaches t_min along kz: compares only, no slab arithmetic. No padding is needed: a
+// triangle whose vertices all lie on one side of the origin in x or y keeps those strict signs
+// after rounding, so triangle_crossing misses it too; and a triangle entirely behind t_min gives
+// a t that is a convex combination of values behind it.
+GWNRT_HD GWNRT_FORCEINLINE bool axis_ray_meets_lane(const WideNode& node, int lane, const RayFrame& f, float t_min) {
+  const float ox = f.origin[f.kx], oy = f.origin[f.ky], oz = f.origin[f.kz];
+  const bool in_xy = (node.lo[f.kx][lane] <= ox) & (ox <= node.hi[f.kx][lane]) & (node.lo[f.ky][lane] <= oy) &
+                     (oy <= node.hi[f.ky][lane]);
+  const bool ahead = f.sz > 0.0f ? node.hi[f.kz][lane] - oz >= t_min : oz - node.lo[f.kz][lane] >= t_min;
+  return in_xy & ahead;
+}
+
+// The same for the four lanes at once, as a bit mask (written without branches, so that the
+// compiler tests the lanes together). Empty lanes have inverted boxes and never pass.
+GWNRT_HD GWNRT_FORCEINLINE uint32_t axis_ray_lane_mask(const WideNode& node, const RayFrame& f, float t_min) {
+  uint32_t mask = 0;
+  for (int l = 0; l < kBvhWidth; ++l) mask |= uint32_t(axis_ray_meets_lane(node, l, f, t_min)) << l;
+  return mask;
+}
+
+// Calls visit(leaf index, t, jump) for every crossing of the axis ray's line with t >= t_min
+// (t_min <= 0 also reports crossings just behind the origin), in no particular order, over the
+// subtree below `root` (0: the whole tree).
+template <class Visitor>
+GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_min,
+                                          Visitor&& visit, uint32_t root = 0) {
+  if (bvh.node_count == 0) return;
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = root;
+  while (sp > 0) {
+    const WideNode& node = bvh.nodes[stack[--sp]];
+    for (uint32_t mask = axis_ray_lane_mask(node, f, t_min); mask != 0; mask &= mask - 1) {
+      const int l = lowest_set_bit(mask);
+      if (node.count[l] == 0) {
+        stack[sp++] = node.child[l];
+        continue;
+      }
+      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
+        float t;
+        int jump;
+        if (triangle_crossing<true>(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump) &&
+            t >= t_min)
+          visit(i, t, jump);
+      }
+    }
+  }
+}
+
+// The axis ray that leaves `box` soonest from x, among the axes set in `axes` (bit k: axis k):
+// toward the face nearest to x (outside the box, one that x is already beyond, so that the ray
+// meets nothing in it).
+GWNRT_HD inline RayFrame shortest_exit_axis_ray(const Aabb& box, const vec3& x, uint32_t axes = 7u) {
+  int axis = 0;
+  float sign = 1.0f, best = kInfinity;
+  for (int k = 0; k < 3; ++k) {
+    if (!((axes >> k) & 1u)) continue;
+    const float up = box.hi[k] - x[k], down = x[k] - box.lo[k];
+    if (up < best) {
+      best = up;
+      axis = k;
+      sign = 1.0f;
+    }
+    if (down < best) {
+      best = down;
+      axis = k;
+      sign = -1.0f;
+    }
+  }
+  vec3 direction(0.0f);
+  direction[axis] = sign;
+  return make_ray_frame(x, direction);
 }
 
 // [t0, t1] of the line inside box b (t0 > t1: no overlap).

@@ -1,0 +1,225 @@
+// Exact w by signed crossings plus the boundary cone (docs/design.md §3): M − C is closed, so
+// off M ∪ C, w − w_C is a whole number, 0 at infinity, that changes by a crossing's jump of M
+// minus that of C. Along one ray from x to beyond the box
+//     w(x) = w_C(x) − Σ jumps of M + Σ jumps of C,        ∇w = ∇w_C,  H_w = H_{w_C},
+// and w_C, ∇w_C, H_{w_C} (the Biot–Savart field of ∂M) come from one traversal of the cone's
+// tree. The cost follows the number of crossings and |∂M|, not |M|; a closed mesh is its
+// crossing count alone, with ∇w = 0. Host-and-device.
+#pragma once
+
+#include "gwnrt/field/winding_number.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/ray.h"
+
+namespace gwnrt {
+
+// The cone's clusters are expanded (order 2) only beyond this multiple of their radius. The
+// crossing method promises |Δw| <= 1e-5 and ∇w to a relative 1e-4, where the tree's beta = 2
+// gives 1e-3; measured max |Δw| over the bench's point mix (bunny_holes, teapot): beta 2:
+// 3.6e-4, 1.1e-3; 4: 2.5e-5, 5.9e-5; 6: 3.6e-6, 8.6e-6; 8: 9.5e-7, 2.1e-6.
+inline constexpr float kConeBeta = 6.0f;
+// ∇w and H_w (relative 1e-4 promised) need more: measured max error over tolerance on
+// bunny_holes and the teapot (points beyond 0.05 of the diagonal from M): beta 6: 17, 30; 8: 3.6,
+// 7.2; 12: 0.78, 0.41; 16: 0.08, 0.03 (Hessian 0.2, 0.09).
+inline constexpr float kConeDerivativeBeta = 16.0f;
+
+struct CrossingStats {
+  uint32_t mesh_crossings = 0;  // crossings of M met by the ray
+  uint32_t cone_crossings = 0;
+  uint32_t cone_near = 0;  // cone triangles summed exactly
+  uint32_t cone_far = 0;   // cone clusters taken by their expansion
+};
+
+namespace detail {
+
+// The cone's part: w_C, ∇w_C, H_{w_C} and the jumps of C along the ray, in one traversal. A
+// cluster far from x is taken by its expansion; when the ray passes through its box its
+// triangles are still tested for crossings (a crossing test is cheap; its solid angle is not).
+// Near triangles are summed exactly, their differences from x and van Oosterom's numerator and
+// denominator in double: the cone's inner edges (apex to ∂M) are singular lines of the two
+// triangles that share them, whose terms cancel, and in float the rounding of x relative to
+// such an edge leaves errors of 1e-4 (phase.h). Whether the ray ahead crosses a near triangle
+// is decided by the sign of the same numerator that decides on which side of it the solid angle
+// puts x, so that the two always agree, even for x within round-off of the cone.
+template <bool WantGradient, bool WantHessian>
+struct ConeCrossingSum {
+  const TriangleTreeView& cone;
+  const RayFrame& frame;
+  const vec3& x;
+  float beta;
+  CrossingStats* stats;
+  FieldAccumulator<float> far_field;
+  UnwrappedAngleSum near_half_angles;  // Σ atan2 of the near triangles
+  dvec3 near_gradient{0.0};
+  Sym3<double> near_hessian;
+  int jumps = 0;         // Σ jumps of C ahead
+  bool on_cone = false;  // x lies exactly on a near cone triangle (its plane, inside or on its edges)
+
+  GWNRT_HD ConeCrossingSum(const TriangleTreeView& cone_tree, const RayFrame& ray, const vec3& point,
+                           float cone_beta = kConeBeta, CrossingStats* counters = nullptr)
+      : cone(cone_tree), frame(ray), x(point), beta(cone_beta), stats(counters) {}
+
+  GWNRT_HD float winding() const {  // w_C
+    return float(double(far_field.omega) * (0.25 / kPi) + near_half_angles.angle() * (0.5 / kPi));
+  }
+
+  GWNRT_HD void add_crossings_below(const WideNode& node, int lane) {
+    const auto add = [&](uint32_t, float, int jump) {
+      jumps += jump;
+      if (stats) ++stats->cone_crossings;
+    };
+    if (node.count[lane] == 0) {
+      visit_axis_crossings(cone.bvh, cone.vertices, frame, 0.0f, add, node.child[lane]);
+      return;
+    }
+    for (uint32_t i = node.child[lane]; i < node.child[lane] + node.count[lane]; ++i) {
+      float t;
+      int jump;
+      if (triangle_crossing<true>(frame, cone.vertices[3 * i], cone.vertices[3 * i + 1], cone.vertices[3 * i + 2], t,
+                                  jump) &&
+          t >= 0.0f)
+        add(i, t, jump);
+    }
+  }
+
+  // Consecutive cone triangles share their apex (one per loop) and usually a boundary vertex (b
+  // of one is a of the next in leaf order): their lengths are reused, not recomputed.
+  vec3 last_apex{kInfinity}, last_b{kInfinity};
+  dvec3 g0{0.0};
+  double l0 = 0.0, last_l2 = 0.0;
+
+  // One near cone triangle; `ray_meets` whether the ray meets its leaf's box at all.
+  GWNRT_HD void near(const vec3& apex, const vec3& a, const vec3& b, bool ray_meets) {
+    const dvec3 xd(x);
+    if (!(apex == last_apex)) {
+      last_apex = apex;
+      g0 = dvec3(apex) - xd;
+      l0 = glm::length(g0);
+    }
+    const dvec3 g1 = dvec3(a) - xd, g2 = dvec3(b) - xd;
+    const double l1 = a == last_b ? last_l2 : glm::length(g1), l2 = glm::length(g2);
+    last_b = b;
+    last_l2 = l2;
+    const SolidAngleTangent<double> tangent =
+        solid_angle_tangent(g0, g1, g2, l0, l1, l2, glm::cross(g1, g2), glm::dot(g1, g2));
+    // -0 + 0 = +0: x on the triangle's plane counts as on its positive side, for the angle and
+    // the crossing alike.
+    const double numerator = tangent.numerator + 0.0;
+    // Exactly on the triangle (in its plane, not outside it): w_C jumps there and the side is not
+    // defined; the caller moves x off C (w is continuous there, C is not part of M).
+    on_cone |= numerator == 0.0 && tangent.denominator <= 0.0;
+    near_half_angles.add(numerator, tangent.denominator);
+    float t;
+    int jump;
+    // numerator = n·(apex − x): the plane lies ahead along the ray when it and n·direction (the
+    // opposite sign of jump) agree.
+    if (ray_meets && triangle_crossing<true>(frame, apex, a, b, t, jump) && (numerator >= 0.0 ? jump < 0 : jump > 0)) {
+      jumps += jump;
+      if (stats) ++stats->cone_crossings;
+    }
+    if constexpr (WantHessian) {
+      dvec3 g;
+      Sym3<double> h;
+      triangle_solid_angle_derivatives(dvec3(apex), dvec3(a), dvec3(b), xd, g, h);
+      near_gradient += g;
+      near_hessian += h;
+    } else if constexpr (WantGradient) {
+      near_gradient += triangle_solid_angle_gradient(dvec3(apex), dvec3(a), dvec3(b), xd);
+    }
+    if (stats) ++stats->cone_near;
+  }
+
+  GWNRT_HD void traverse() {
+    if (cone.bvh.node_count == 0) return;
+    uint32_t stack[kTraversalStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    const float inner_scale2 = beta * beta;
+    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const WideNode& node = cone.bvh.nodes[ni];
+      const WideNodeExpansion& ex = cone.expansion[ni];
+      for (int l = 0; l < kBvhWidth; ++l) {
+        const vec3 d(ex.centre[0][l] - x.x, ex.centre[1][l] - x.y, ex.centre[2][l] - x.z);
+        const float scale2 = node.count[l] == 0 ? inner_scale2 : leaf_scale2;
+        // Empty lanes have a NaN centre, so they never pass this test.
+        if (glm::dot(d, d) > scale2 * ex.radius[l] * ex.radius[l]) {
+          add_cluster_far_field<2, WantGradient, WantHessian>(cone, ni, l, d, far_field);
+          if (stats) ++stats->cone_far;
+          if (axis_ray_meets_lane(node, l, frame, 0.0f)) add_crossings_below(node, l);
+          continue;
+        }
+        const uint32_t child = node.child[l];
+        if (child == kEmptyLane) continue;
+        if (node.count[l] == 0) {
+          stack[sp++] = child;
+          continue;
+        }
+        const bool ray_meets = axis_ray_meets_lane(node, l, frame, 0.0f);
+        for (uint32_t t = child; t < child + node.count[l]; ++t)
+          near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], ray_meets);
+      }
+    }
+  }
+};
+
+}  // namespace detail
+
+// w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
+// cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M, where
+// the side of M that x is on is itself a matter of round-off.
+// x exactly on a cone triangle (found in the traversal: the tangent's numerator 0 and its
+// denominator <= 0) is moved by this many ulps of its largest coordinate along a fixed direction,
+// up to kConeNudgeTries times (each 8x farther): w is continuous there, so the moved point has
+// the same w up to the move times |∇w|. It happens where x and a cap of ∂M share exact
+// coordinates (an axis-aligned hole and a grid of query points in its plane).
+inline constexpr float kConeNudgeUlps = 4.0f;
+inline constexpr int kConeNudgeTries = 4;
+
+template <bool WantGradient, bool WantHessian>
+GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x_in,
+                                               float cone_beta = (WantGradient || WantHessian) ? kConeDerivativeBeta
+                                                                                               : kConeBeta,
+                                               CrossingStats* stats = nullptr) {
+  vec3 x = x_in;
+  const float scale = max_of(fabsf(x.x), max_of(fabsf(x.y), fabsf(x.z))) * 1.2e-7f;  // about 1 ulp
+  float nudge = kConeNudgeUlps * max_of(scale, 1e-30f);
+  for (int attempt = 0;; ++attempt) {
+    const RayFrame frame = shortest_exit_axis_ray(m.bounds, x);
+    detail::ConeCrossingSum<WantGradient, WantHessian> cone(m.cone, frame, x, cone_beta, stats);
+    cone.traverse();
+    if (cone.on_cone && attempt < kConeNudgeTries) {
+      x = x_in + nudge * vec3(0.5345225f, -0.2672612f, 0.8017837f);  // a generic unit direction
+      nudge *= 8.0f;
+      continue;
+    }
+    int mesh_jumps = 0;
+    visit_axis_crossings(m.triangles.bvh, m.triangles.vertices, frame, 0.0f, [&](uint32_t, float, int jump) {
+      mesh_jumps += jump;
+      if (stats) ++stats->mesh_crossings;
+    });
+    WindingSample out;
+    out.w = float(cone.jumps - mesh_jumps) + cone.winding();
+    if constexpr (WantGradient)
+      out.gradient = cone.far_field.gradient * kInv4Pi + vec3(cone.near_gradient * (0.25 * kInvPi));
+    if constexpr (WantHessian) {
+      const Sym3<double> h = cone.near_hessian * (0.25 * kInvPi);
+      const Sym3<float> near{float(h.xx), float(h.xy), float(h.xz), float(h.yy), float(h.yz), float(h.zz)};
+      out.hessian = cone.far_field.hessian * kInv4Pi;
+      out.hessian += near;
+    }
+    return out;
+  }
+}
+
+GWNRT_HD inline WindingSample winding_number_crossing(const ModelView& m, const vec3& x, bool want_gradient,
+                                                      bool want_hessian, CrossingStats* stats = nullptr) {
+  if (want_hessian)
+    return want_gradient ? winding_number_crossing<true, true>(m, x, kConeDerivativeBeta, stats)
+                         : winding_number_crossing<false, true>(m, x, kConeDerivativeBeta, stats);
+  return want_gradient ? winding_number_crossing<true, false>(m, x, kConeDerivativeBeta, stats)
+                       : winding_number_crossing<false, false>(m, x, kConeBeta, stats);
+}
+
+}  // namespace gwnrt

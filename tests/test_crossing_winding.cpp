@@ -1,0 +1,396 @@
+// Exact w by signed crossings plus the boundary cone (field/crossing_winding.h): against the
+// double brute force of tests/reference on the bundled meshes and on soups built here, with rays
+// placed exactly through vertices and edges of M and of the cone; ∇w and H_w against central
+// differences of the brute-force w; the sheet classification by crossings against the
+// brute-force sides; and the rule by which `auto` chooses.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "brute_force_winding.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/field/evaluate_winding.h"
+#include "parallel_over.h"
+#include "test_util.h"
+
+namespace gwnrt {
+namespace {
+
+using test::build_model;
+using test::load_test_mesh;
+
+// What the method promises (README): |Δw| <= 1e-5 wherever x is farther than 1e-5 of the box
+// diagonal from M (nearer, the side of M that x is on is a matter of float round-off).
+constexpr double kCrossingTolerance = 1e-5;
+constexpr double kNearMesh = 1e-5;
+
+// A soup that lists some faces two and three times (the second copy of every seventh face, a
+// third of every 31st), with its own vertices per copy: w jumps by 2 or 3 across those.
+Mesh stacked_soup(const Mesh& base) {
+  Mesh m = base;
+  for (size_t t = 0; t < base.triangles.size(); ++t) {
+    const int copies = (t % 31 == 0) ? 2 : (t % 7 == 0 ? 1 : 0);
+    for (int c = 0; c < copies; ++c) {
+      const uint32_t first = uint32_t(m.positions.size());
+      for (int k = 0; k < 3; ++k) m.positions.push_back(base.positions[base.triangles[t][k]]);
+      m.triangles.push_back({first, first + 1, first + 2});
+    }
+  }
+  return m;
+}
+
+// Every fifth face flipped: an inconsistently oriented mesh (each flipped face's edges are ∂M
+// twice over).
+Mesh flipped_faces(const Mesh& base) {
+  Mesh m = base;
+  for (size_t t = 0; t < m.triangles.size(); t += 5) std::swap(m.triangles[t][1], m.triangles[t][2]);
+  return m;
+}
+
+// Random triangles over a small pool of random vertices: non-manifold edges, intersections.
+Mesh random_soup(uint32_t seed, int vertices, int triangles) {
+  test::Random rng(seed);
+  Mesh m;
+  for (int i = 0; i < vertices; ++i)
+    m.positions.push_back({rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)});
+  while (int(m.triangles.size()) < triangles) {
+    const uint32_t a = uint32_t(rng.index(vertices)), b = uint32_t(rng.index(vertices)),
+                   c = uint32_t(rng.index(vertices));
+    if (a != b && b != c && a != c) m.triangles.push_back({a, b, c});
+  }
+  return m;
+}
+
+// Every triangle shrunk about its centroid: no two share a corner, every edge is ∂M.
+Mesh shrunk_soup(const Mesh& base) {
+  Mesh m;
+  for (const uvec3& t : base.triangles) {
+    const vec3 c = (base.positions[t[0]] + base.positions[t[1]] + base.positions[t[2]]) / 3.0f;
+    const uint32_t first = uint32_t(m.positions.size());
+    for (int k = 0; k < 3; ++k) m.positions.push_back(c + 0.9f * (base.positions[t[k]] - c));
+    m.triangles.push_back({first, first + 1, first + 2});
+  }
+  return m;
+}
+
+// The cube [-1, 1]³ with each face a 4x4 grid of squares (coordinates multiples of 1/2, exact
+// in float) and the four middle squares of the top face removed: ∂M is the square of side 1
+// at z = 1, the cone's apex its centre (0, 0, 1), and edge midpoints are exact too.
+Mesh holed_grid_cube() {
+  Mesh m;
+  const int n = 4;
+  auto corner = [&](int axis, float side, int i, int j) {
+    vec3 p;
+    p[axis] = side;
+    p[(axis + 1) % 3] = -1.0f + 0.5f * float(i);
+    p[(axis + 2) % 3] = -1.0f + 0.5f * float(j);
+    return p;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (float side : {-1.0f, 1.0f})
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          if (axis == 2 && side > 0 && (i == 1 || i == 2) && (j == 1 || j == 2)) continue;
+          const uint32_t first = uint32_t(m.positions.size());
+          m.positions.insert(m.positions.end(), {corner(axis, side, i, j), corner(axis, side, i + 1, j),
+                                                 corner(axis, side, i + 1, j + 1), corner(axis, side, i, j + 1)});
+          // (axis+1, axis+2, axis) is right-handed: this winding faces +axis; flip for the -1 side.
+          if (side > 0)
+            m.triangles.insert(m.triangles.end(), {{first, first + 1, first + 2}, {first, first + 2, first + 3}});
+          else
+            m.triangles.insert(m.triangles.end(), {{first, first + 2, first + 1}, {first, first + 3, first + 2}});
+        }
+  return m;
+}
+
+struct Case {
+  std::string name;
+  Mesh mesh;
+};
+
+std::vector<Case> accuracy_cases() {
+  std::vector<Case> cases;
+  for (const char* name : {"bunny.obj", "bunny_holes.obj", "teapot.obj", "dragon_vrip_res4.ply"})
+    cases.push_back({name, load_test_mesh(name)});
+  const Mesh bunny_holes = load_test_mesh("bunny_holes.obj");
+  cases.push_back({"stacked soup (bunny_holes)", stacked_soup(bunny_holes)});
+  cases.push_back({"flipped faces (bunny)", flipped_faces(load_test_mesh("bunny.obj"))});
+  cases.push_back({"random non-manifold soup", random_soup(7, 60, 300)});
+  cases.push_back({"holed grid cube", holed_grid_cube()});
+  return cases;
+}
+
+struct Comparison {
+  size_t compared = 0, skipped = 0;
+  double max_error = 0;
+};
+
+// Crossing w at `points` against the brute force, for those farther than kNearMesh·diag from M.
+Comparison compare_with_brute_force(const std::string& name, const GwnModel& model, const reference::ReferenceMesh& ref,
+                                    const std::vector<vec3>& points) {
+  const ModelView v = model.view();
+  std::vector<double> error(points.size(), -1.0);
+  reference::parallel_over(points.size(), [&](size_t i) {
+    if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
+    const double w = winding_number_crossing<false, false>(v, points[i]).w;
+    error[i] = std::fabs(w - reference::reference_w(ref, dvec3(points[i])));
+  });
+  Comparison c;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (error[i] < 0) {
+      ++c.skipped;
+      continue;
+    }
+    ++c.compared;
+    c.max_error = std::max(c.max_error, error[i]);
+    EXPECT_LE(error[i], kCrossingTolerance)
+        << name << ": point " << i << " (" << points[i].x << ", " << points[i].y << ", " << points[i].z << ")";
+  }
+  return c;
+}
+
+TEST(CrossingWinding, MatchesBruteForceOnMeshesAndSoups) {
+  for (Case& c : accuracy_cases()) {
+    const reference::ReferenceMesh ref = reference::reference_mesh(c.mesh);
+    const Aabb box = test::mesh_bounds(c.mesh);
+    const GwnModel model = build_model(std::move(c.mesh));
+    const std::vector<vec3> points = test::sample_points(box, 1500, 3);
+    const Comparison r = compare_with_brute_force(c.name, model, ref, points);
+    EXPECT_GT(r.compared, 1000u) << c.name;
+    std::printf("[ %-26s ] %zu triangles, %u cone triangles: max |dw| %.2e over %zu points (%zu nearer M)\n",
+                c.name.c_str(), model.mesh().triangles.size(), model.view().cone.triangle_count, r.max_error,
+                r.compared, r.skipped);
+  }
+}
+
+// Points from which the ray (the shortest axis exit, shortest_exit_axis_ray) passes exactly
+// through `target`: target moved back along each axis direction by `back`, kept where that
+// direction is the one the method picks. The other two coordinates equal the target's exactly.
+std::vector<vec3> points_with_rays_through(const Aabb& box, const vec3& target, float back) {
+  std::vector<vec3> out;
+  for (int k = 0; k < 3; ++k)
+    for (float sign : {1.0f, -1.0f}) {
+      vec3 x = target;
+      x[k] -= sign * back;
+      const RayFrame f = shortest_exit_axis_ray(box, x);
+      if (f.kz == k && (f.sz > 0.0f) == (sign > 0.0f)) out.push_back(x);
+    }
+  return out;
+}
+
+TEST(CrossingWinding, RaysExactlyThroughVerticesAndEdgesOfMeshAndCone) {
+  struct Mesh_ {
+    std::string name;
+    Mesh mesh;
+  };
+  std::vector<Mesh_> meshes;
+  meshes.push_back({"holed grid cube", holed_grid_cube()});
+  meshes.push_back({"bunny_holes", load_test_mesh("bunny_holes.obj")});
+  meshes.push_back({"teapot", load_test_mesh("teapot.obj")});
+  for (Mesh_& m : meshes) {
+    const reference::ReferenceMesh ref = reference::reference_mesh(m.mesh);
+    const Aabb box = test::mesh_bounds(m.mesh);
+    const float diagonal = float(ref.diagonal);
+    // Targets: every vertex of M; every edge midpoint that is exactly the midpoint (so on the
+    // edge: all of them for the grid); the cone's vertices (its apexes and ∂M) and the exact
+    // midpoints of its edges.
+    std::vector<vec3> targets = m.mesh.positions;
+    auto add_midpoint = [&](const vec3& a, const vec3& b) {
+      const vec3 mid = 0.5f * (a + b);
+      if (dvec3(mid) - dvec3(a) == dvec3(b) - dvec3(mid)) targets.push_back(mid);
+    };
+    for (const uvec3& t : m.mesh.triangles)
+      for (int k = 0; k < 3; ++k) add_midpoint(m.mesh.positions[t[k]], m.mesh.positions[t[(k + 1) % 3]]);
+    const GwnModel model = build_model(std::move(m.mesh));
+    const TriangleTreeView cone = model.view().cone;
+    size_t cone_targets = 0;
+    for (uint32_t t = 0; t < cone.triangle_count; ++t)
+      for (int k = 0; k < 3; ++k) {
+        targets.push_back(cone.vertices[3 * t + k]);
+        add_midpoint(cone.vertices[3 * t + k], cone.vertices[3 * t + (k + 1) % 3]);
+        cone_targets += 2;
+      }
+    std::vector<vec3> points;
+    for (const vec3& target : targets)
+      for (float back : {0.01f, 0.13f})
+        for (const vec3& x : points_with_rays_through(box, target, back * diagonal)) points.push_back(x);
+    const Comparison r = compare_with_brute_force(m.name, model, ref, points);
+    EXPECT_GT(r.compared, points.size() / 2) << m.name;
+    std::printf("[ %-16s ] %zu rays through %zu targets (%zu on the cone): max |dw| %.2e (%zu nearer M)\n",
+                m.name.c_str(), r.compared, targets.size(), cone_targets, r.max_error, r.skipped);
+  }
+}
+
+// Central differences of the brute-force w: ∇w with h = 1e-4·diag (truncation (h/d)²/6 < 1e-6
+// of |∇w| at d >= 0.05·diag; rounding 1e-14/h), H_w from second differences.
+dvec3 difference_gradient(const reference::ReferenceMesh& ref, const dvec3& x, double h) {
+  dvec3 g;
+  for (int a = 0; a < 3; ++a) {
+    dvec3 e(0.0);
+    e[a] = h;
+    g[a] = (reference::reference_w(ref, x + e) - reference::reference_w(ref, x - e)) / (2 * h);
+  }
+  return g;
+}
+
+double second_difference(const reference::ReferenceMesh& ref, const dvec3& x, double h, int a, int b) {
+  dvec3 ea(0.0), eb(0.0);
+  ea[a] = h;
+  eb[b] = h;
+  if (a == b)
+    return (reference::reference_w(ref, x + ea) - 2 * reference::reference_w(ref, x) +
+            reference::reference_w(ref, x - ea)) /
+           (h * h);
+  return (reference::reference_w(ref, x + ea + eb) - reference::reference_w(ref, x + ea - eb) -
+          reference::reference_w(ref, x - ea + eb) + reference::reference_w(ref, x - ea - eb)) /
+         (4 * h * h);
+}
+
+// Richardson's extrapolation of the second differences at h and h/2: truncation O(h⁴), about
+// (h/d)⁴ = 3e-6 relative at d >= 0.05·diag with h = 2e-3·diag; rounding 1e-14/(h/2)² =
+// 1e-8/diag².
+double difference_hessian(const reference::ReferenceMesh& ref, const dvec3& x, double h, int a, int b) {
+  return (4.0 * second_difference(ref, x, 0.5 * h, a, b) - second_difference(ref, x, h, a, b)) / 3.0;
+}
+
+TEST(CrossingWinding, GradientAndHessianFromTheConeMatchDifferences) {
+  std::vector<Case> cases;
+  cases.push_back({"bunny_holes", load_test_mesh("bunny_holes.obj")});
+  cases.push_back({"teapot", load_test_mesh("teapot.obj")});
+  cases.push_back({"holed grid cube", holed_grid_cube()});
+  for (Case& c : cases) {
+    const reference::ReferenceMesh ref = reference::reference_mesh(c.mesh);
+    const Aabb box = test::mesh_bounds(c.mesh);
+    const GwnModel model = build_model(std::move(c.mesh));
+    const ModelView v = model.view();
+    const double diag = ref.diagonal;
+    std::vector<vec3> points;
+    for (const vec3& x : test::sample_points(box, 3000, 5))
+      if (unsigned_distance(v.triangles, x).distance > 0.05 * diag && points.size() < 150) points.push_back(x);
+    ASSERT_GE(points.size(), 100u) << c.name;
+    std::vector<double> grad_error(points.size()), hess_error(points.size());
+    reference::parallel_over(
+        points.size(),
+        [&](size_t i) {
+          const dvec3 x(points[i]);
+          const WindingSample s = winding_number_crossing<true, true>(v, points[i]);
+          const dvec3 g = difference_gradient(ref, x, 1e-4 * diag);
+          // Relative 1e-4 where |∇w| > 1e-3/diag, absolute 1e-7/diag elsewhere.
+          grad_error[i] = glm::length(dvec3(s.gradient) - g) / std::max(1e-4 * glm::length(g), 1e-7 / diag);
+          const double h = 2e-3 * diag;
+          const double got[6] = {s.hessian.xx, s.hessian.xy, s.hessian.xz, s.hessian.yy, s.hessian.yz, s.hessian.zz};
+          const int pairs[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+          double want[6], norm = 0, diff = 0;
+          for (int k = 0; k < 6; ++k) {
+            want[k] = difference_hessian(ref, x, h, pairs[k][0], pairs[k][1]);
+            norm = std::max(norm, std::fabs(want[k]));
+          }
+          for (int k = 0; k < 6; ++k) diff = std::max(diff, std::fabs(got[k] - want[k]));
+          // The same tolerances for H_w: relative 1e-4, absolute 1e-7/diag² where it is small.
+          hess_error[i] = diff / std::max(1e-4 * norm, 1e-7 / (diag * diag));
+        },
+        4);
+    double worst_g = 0, worst_h = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      EXPECT_LE(grad_error[i], 1.0) << c.name << " gradient at point " << i;
+      EXPECT_LE(hess_error[i], 1.0) << c.name << " Hessian at point " << i;
+      worst_g = std::max(worst_g, grad_error[i]);
+      worst_h = std::max(worst_h, hess_error[i]);
+    }
+    std::printf("[ %-16s ] %zu points: gradient error / tolerance %.3f, Hessian error / tolerance %.3f\n",
+                c.name.c_str(), points.size(), worst_g, worst_h);
+  }
+}
+
+TEST(CrossingWinding, ClosedMeshHasZeroGradientAndHessianAndWholeNumbers) {
+  const GwnModel model = build_model(load_test_mesh("bunny.obj"));
+  const ModelView v = model.view();
+  ASSERT_EQ(v.cone.triangle_count, 0u);
+  for (const vec3& x : test::sample_points(model.bounds(), 500, 9)) {
+    const WindingSample s = winding_number_crossing<true, true>(v, x);
+    EXPECT_TRUE(s.w == 0.0f || s.w == 1.0f) << s.w;
+    EXPECT_EQ(s.gradient, vec3(0.0f));
+    EXPECT_EQ(s.hessian.xx, 0.0f);
+    EXPECT_EQ(s.hessian.xy, 0.0f);
+    EXPECT_EQ(s.hessian.zz, 0.0f);
+  }
+}
+
+TEST(CrossingWinding, AutoPicksTaylorForAllBoundarySoupAndCrossingForSmallBoundary) {
+  const GwnModel holes = build_model(load_test_mesh("bunny_holes.obj"));
+  EXPECT_EQ(resolve_winding_method(holes.view(), WindingMethod::kAuto), WindingMethod::kCrossing);
+  const GwnModel closed = build_model(load_test_mesh("bunny.obj"));
+  EXPECT_EQ(resolve_winding_method(closed.view(), WindingMethod::kAuto), WindingMethod::kCrossing);
+  const GwnModel soup = build_model(shrunk_soup(load_test_mesh("bunny.obj")));
+  EXPECT_EQ(soup.view().cone.triangle_count, 3 * soup.view().triangles.triangle_count);
+  EXPECT_EQ(resolve_winding_method(soup.view(), WindingMethod::kAuto), WindingMethod::kTaylor);
+  // An explicit method is kept.
+  EXPECT_EQ(resolve_winding_method(soup.view(), WindingMethod::kCrossing), WindingMethod::kCrossing);
+  EXPECT_EQ(resolve_winding_method(holes.view(), WindingMethod::kBrute), WindingMethod::kBrute);
+  // And the sheets were classified by the method auto chose.
+  EXPECT_EQ(holes.sheet_method(), WindingMethod::kCrossing);
+  EXPECT_EQ(soup.sheet_method(), WindingMethod::kTaylor);
+}
+
+// The brute-force sides of a triangle: w_o = the mean of w just off its centroid on either side
+// (1e-7 along its unit normal), the jump k = their difference (both in double).
+struct ReferenceSides {
+  double other = NAN;
+  int jump = 0;
+};
+
+ReferenceSides reference_sides(const reference::ReferenceMesh& ref, const Mesh& m, size_t t) {
+  const dvec3 a(m.positions[m.triangles[t][0]]), b(m.positions[m.triangles[t][1]]), c(m.positions[m.triangles[t][2]]);
+  const dvec3 n = glm::cross(b - a, c - a);
+  if (n == dvec3(0.0)) return {};
+  const dvec3 centroid = (a + b + c) / 3.0, u = glm::normalize(n);
+  const double behind = reference::reference_w(ref, centroid - 1e-7 * u),
+               front = reference::reference_w(ref, centroid + 1e-7 * u);
+  return {0.5 * (behind + front), int(std::lround(behind - front))};
+}
+
+TEST(CrossingWinding, SheetClassificationAgreesWithBruteForceSides) {
+  std::vector<Case> cases;
+  cases.push_back({"bunny_holes", load_test_mesh("bunny_holes.obj")});
+  cases.push_back({"teapot", load_test_mesh("teapot.obj")});
+  cases.push_back({"stacked soup", stacked_soup(load_test_mesh("bunny_holes.obj"))});
+  for (Case& c : cases) {
+    const reference::ReferenceMesh ref = reference::reference_mesh(c.mesh);
+    const Mesh mesh = c.mesh;
+    BuildOptions options;
+    options.sheet_method = WindingMethod::kCrossing;
+    GwnModel model;
+    ASSERT_TRUE(GwnModel::build(std::move(c.mesh), model, options).ok());
+    ASSERT_EQ(model.sheet_method(), WindingMethod::kCrossing);
+    std::vector<ReferenceSides> sides(mesh.triangles.size());
+    reference::parallel_over(mesh.triangles.size(), [&](size_t t) { sides[t] = reference_sides(ref, mesh, t); });
+    double max_error = 0;
+    size_t decided = 0, stacked = 0;
+    for (float level : {0.5f, 0.2f, 0.9f}) {
+      ASSERT_TRUE(model.set_sheet_level(level).ok());
+      std::vector<bool> in_tree(mesh.triangles.size(), false);
+      for (uint32_t id : model.sheet_tree().triangle_ids) in_tree.at(id) = true;
+      for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        if (std::isnan(sides[t].other)) continue;
+        const double error = std::fabs(model.other_winding()[t] - sides[t].other);
+        max_error = std::max(max_error, error);
+        EXPECT_LE(error, kCrossingTolerance) << c.name << " triangle " << t;
+        EXPECT_EQ(std::abs(int(model.sheet_jump()[t])), std::abs(sides[t].jump)) << c.name << " triangle " << t;
+        stacked += level == 0.5f && std::abs(sides[t].jump) > 1;
+        const double half = 0.5 * std::abs(sides[t].jump);
+        // Sides within the tolerance of w* are left to round-off.
+        if (std::fabs(std::fabs(sides[t].other - level) - half) < kCrossingTolerance) continue;
+        ++decided;
+        EXPECT_EQ(in_tree[t], std::fabs(sides[t].other - level) < half)
+            << c.name << " level " << level << " triangle " << t << " reference " << sides[t].other;
+      }
+    }
+    std::printf("[ %-12s ] %zu decisions over 3 levels agree; max |w_o - reference| %.2e; %zu stacked triangles\n",
+                c.name.c_str(), decided, max_error, stacked);
+  }
+}
+
+}  // namespace
+}  // namespace gwnrt
