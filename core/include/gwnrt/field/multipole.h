@@ -13,6 +13,7 @@
 // so that is what the tree stores. ∇ₓΩ = -∇_d Ω and Hₓ Ω = H_d Ω (d = p̄ - x).
 #pragma once
 
+#include "gwnrt/field/lanes.h"
 #include "gwnrt/hd.h"
 
 namespace gwnrt {
@@ -33,51 +34,67 @@ struct FieldAccumulator {
   Sym3<T> hessian;
 };
 
+// The quantities of one cluster's expansion at d = p̄ - x that Ω, ∇Ω and H Ω share, and Ω
+// itself. T is float (one lane) or a lane vector (lanes.h: a node's four lanes at once); the
+// moments are indexed as in Moments.
+template <int Order, class T>
+struct FarFieldTerms {
+  T inv_r2, inv_r3, inv_r5, inv_r7, inv_r9;
+  T n_dot_d;
+  T sd[3] = {}, half_trace_s{}, dsd{};       // order 1: S d, ½ tr S, dᵀS d
+  T q[6] = {}, qd[3] = {}, c3{}, e_dot_d{};  // order 2: Q = P(d,·,·), Q d, P(d,d,d), e·d
+  T omega;
+
+  GWNRT_HD GWNRT_FORCEINLINE FarFieldTerms(const T* n, const T* s, const T* p, const T* e, T dx, T dy, T dz) {
+    const T r2 = dx * dx + dy * dy + dz * dz;
+    inv_r2 = 1.0f / r2;
+    const T inv_r = lane_sqrt(inv_r2);
+    inv_r3 = inv_r * inv_r2;
+    inv_r5 = inv_r3 * inv_r2;
+    inv_r7 = inv_r5 * inv_r2;
+    inv_r9 = inv_r7 * inv_r2;
+    n_dot_d = n[0] * dx + n[1] * dy + n[2] * dz;
+    omega = n_dot_d * inv_r3;
+    if constexpr (Order >= 1) {
+      sd[0] = s[0] * dx + s[1] * dy + s[2] * dz;
+      sd[1] = s[1] * dx + s[3] * dy + s[4] * dz;
+      sd[2] = s[2] * dx + s[4] * dy + s[5] * dz;
+      half_trace_s = 0.5f * (s[0] + s[3] + s[5]);
+      dsd = dx * sd[0] + dy * sd[1] + dz * sd[2];
+      omega += half_trace_s * inv_r3 - 1.5f * dsd * inv_r5;
+    }
+    // P(d,d,·) = Q d and P(d,d,d) = d·Q d.
+    if constexpr (Order >= 2) {
+      q[0] = p[0] * dx + p[1] * dy + p[2] * dz;  // xx
+      q[1] = p[1] * dx + p[3] * dy + p[4] * dz;  // xy
+      q[2] = p[2] * dx + p[4] * dy + p[5] * dz;  // xz
+      q[3] = p[3] * dx + p[6] * dy + p[7] * dz;  // yy
+      q[4] = p[4] * dx + p[7] * dy + p[8] * dz;  // yz
+      q[5] = p[5] * dx + p[8] * dy + p[9] * dz;  // zz
+      qd[0] = q[0] * dx + q[1] * dy + q[2] * dz;
+      qd[1] = q[1] * dx + q[3] * dy + q[4] * dz;
+      qd[2] = q[2] * dx + q[4] * dy + q[5] * dz;
+      c3 = dx * qd[0] + dy * qd[1] + dz * qd[2];
+      e_dot_d = e[0] * dx + e[1] * dy + e[2] * dz;
+      omega += 7.5f * c3 * inv_r7 - 1.5f * e_dot_d * inv_r5;
+    }
+  }
+};
+
 // Adds the far-field contribution of one cluster at offset d = p̄ - x.
 template <int Order, bool WantGradient, bool WantHessian>
 GWNRT_HD GWNRT_FORCEINLINE void add_far_field(const float* n, const float* s, const float* p, const float* e,
                                               const vec3& d, FieldAccumulator<float>& acc) {
-  const float r2 = glm::dot(d, d);
-  const float inv_r2 = 1.0f / r2;
-  const float inv_r = sqrtf(inv_r2);
-  const float inv_r3 = inv_r * inv_r2;
-  const float inv_r5 = inv_r3 * inv_r2;
-  const float inv_r7 = inv_r5 * inv_r2;
-  const float inv_r9 = inv_r7 * inv_r2;
-
-  const vec3 N(n[0], n[1], n[2]);
-  const float n_dot_d = glm::dot(N, d);
-  float omega = n_dot_d * inv_r3;
-
-  // Order-1 quantities.
-  vec3 sd(0.0f);
-  float half_trace_s = 0.0f, dsd = 0.0f;
-  if constexpr (Order >= 1) {
-    sd = vec3(s[0] * d.x + s[1] * d.y + s[2] * d.z, s[1] * d.x + s[3] * d.y + s[4] * d.z,
-              s[2] * d.x + s[4] * d.y + s[5] * d.z);
-    half_trace_s = 0.5f * (s[0] + s[3] + s[5]);
-    dsd = glm::dot(d, sd);
-    omega += half_trace_s * inv_r3 - 1.5f * dsd * inv_r5;
-  }
-  // Order-2 quantities: Q = P(d,·,·), so P(d,d,·) = Q d and P(d,d,d) = d·Q d.
-  Sym3<float> q;
-  vec3 qd(0.0f), E(0.0f);
-  float c3 = 0.0f, e_dot_d = 0.0f;
-  if constexpr (Order >= 2) {
-    q.xx = p[0] * d.x + p[1] * d.y + p[2] * d.z;
-    q.xy = p[1] * d.x + p[3] * d.y + p[4] * d.z;
-    q.xz = p[2] * d.x + p[4] * d.y + p[5] * d.z;
-    q.yy = p[3] * d.x + p[6] * d.y + p[7] * d.z;
-    q.yz = p[4] * d.x + p[7] * d.y + p[8] * d.z;
-    q.zz = p[5] * d.x + p[8] * d.y + p[9] * d.z;
-    qd = vec3(q.xx * d.x + q.xy * d.y + q.xz * d.z, q.xy * d.x + q.yy * d.y + q.yz * d.z,
-              q.xz * d.x + q.yz * d.y + q.zz * d.z);
-    c3 = glm::dot(d, qd);
-    E = vec3(e[0], e[1], e[2]);
-    e_dot_d = glm::dot(E, d);
-    omega += 7.5f * c3 * inv_r7 - 1.5f * e_dot_d * inv_r5;
-  }
-  acc.omega += omega;
+  const FarFieldTerms<Order, float> t(n, s, p, e, d.x, d.y, d.z);
+  acc.omega += t.omega;
+  const float inv_r2 = t.inv_r2, inv_r3 = t.inv_r3, inv_r5 = t.inv_r5, inv_r7 = t.inv_r7, inv_r9 = t.inv_r9;
+  const float n_dot_d = t.n_dot_d, half_trace_s = t.half_trace_s, dsd = t.dsd, c3 = t.c3, e_dot_d = t.e_dot_d;
+  const vec3 N(n[0], n[1], n[2]), sd(t.sd[0], t.sd[1], t.sd[2]), qd(t.qd[0], t.qd[1], t.qd[2]);
+  vec3 E(0.0f);
+  if constexpr (Order >= 2) E = vec3(e[0], e[1], e[2]);
+  const Sym3<float> q{t.q[0], t.q[1], t.q[2], t.q[3], t.q[4], t.q[5]};
+  (void)inv_r2;
+  (void)inv_r9;
 
   if constexpr (WantGradient || WantHessian) {
     // ∇_d Ω written as (along_d)·d + rest.

@@ -17,13 +17,20 @@ struct SolidAngleTangent {
   T numerator, denominator;
 };
 
+// Van Oosterom–Strackee's denominator from the corners' lengths and their dot products a·b, b·c,
+// c·a: for any T, a scalar or a lane vector (the host's multipole traversal, winding_number.h).
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T solid_angle_denominator(T la, T lb, T lc, T ab, T bc, T ca) {
+  return la * lb * lc + ab * lc + bc * la + ca * lb;
+}
+
 // From the corners relative to x (a, b, c), their lengths, b × c and b·c: the pieces a caller
 // may already have (the tracer shares them with its bound on the edge b -> c, phase.h).
 template <class T>
 GWNRT_HD GWNRT_FORCEINLINE SolidAngleTangent<T> solid_angle_tangent(const glm::vec<3, T>& a, const glm::vec<3, T>& b,
                                                                     const glm::vec<3, T>& c, T la, T lb, T lc,
                                                                     const glm::vec<3, T>& b_cross_c, T b_dot_c) {
-  return {glm::dot(a, b_cross_c), la * lb * lc + glm::dot(a, b) * lc + b_dot_c * la + glm::dot(c, a) * lb};
+  return {glm::dot(a, b_cross_c), solid_angle_denominator(la, lb, lc, glm::dot(a, b), b_dot_c, glm::dot(c, a))};
 }
 
 template <class T>
