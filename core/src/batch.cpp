@@ -1,10 +1,14 @@
 #include "gwnrt/batch.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 namespace gwnrt {
 namespace {
@@ -12,20 +16,64 @@ namespace {
 // What the drivers share: `name` fails when in and out differ in size (naming what they hold),
 // else out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
 // validate runs between the two checks, so a batch of the wrong size is reported as that first.
-template <class In, class Out, class Validate, class Fn>
+// `order`, when given, is the sequence in which items are visited (the low 32 bits of each entry
+// are the item's index): results still land at their items' places.
+template <class In, class Out, class Validate, class Fn, class Order>
 Status parallel_map(const char* name, const char* items, const char* slots, std::span<const In> in, std::span<Out> out,
-                    size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn) {
+                    size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn, Order make_order) {
   if (in.size() != out.size())
     return {StatusCode::kInvalidArgument, std::string(name) + ": " + std::to_string(in.size()) + " " + items + " but " +
                                               std::to_string(out.size()) + " " + slots};
   if (Status s = validate(); !s.ok()) return s;
   return guard_status(name, [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), grain), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fn(in[i]);
+    const std::vector<uint64_t> order = make_order();
+    // A small batch of costly items (the brute force's few points) still spreads over the
+    // threads: at least 64 chunks where there are that many items.
+    const size_t chunk = std::max<size_t>(1, std::min(grain, in.size() / 64));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), chunk), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k != range.end(); ++k) {
+        const size_t i = order.empty() ? k : size_t(order[k] & 0xffffffffu);
+        out[i] = fn(in[i]);
+      }
       if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
     });
     return Status::Ok();
   });
+}
+
+// Points are evaluated in Morton order of a 2^10 grid over the model's box (points outside clamp
+// to its faces), so that consecutive queries touch the same parts of the trees. Measured on the
+// 871k dragon (one core, order 2, 100k points of the bench's mix): 4.9 µs a query shuffled,
+// 1.9 µs sorted, the trees' 47 MB not staying in cache otherwise; the sort costs about 0.1 µs a
+// point. Small batches keep their order (the trees of small meshes stay in cache anyway).
+inline constexpr size_t kSpatialOrderMinPoints = 16384;
+
+uint32_t spread_bits(uint32_t v) {  // 10 bits to every third of 30
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+std::vector<uint64_t> spatial_order(const Aabb& box, std::span<const vec3> points) {
+  std::vector<uint64_t> order;
+  if (points.size() < kSpatialOrderMinPoints || points.size() > 0xffffffffu || !box.valid()) return order;
+  order.resize(points.size());
+  const vec3 extent = glm::max(box.hi - box.lo, vec3(1e-30f));
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      uint32_t cell[3];
+      for (int a = 0; a < 3; ++a) {
+        const float u = (points[i][a] - box.lo[a]) / extent[a] * 1024.0f;  // NaN fails both tests: cell 0
+        cell[a] = u > 0.0f ? (u < 1023.0f ? uint32_t(u) : 1023u) : 0u;
+      }
+      const uint64_t code = spread_bits(cell[0]) | (spread_bits(cell[1]) << 1) | (spread_bits(cell[2]) << 2);
+      order[i] = (code << 32) | uint64_t(i);
+    }
+  });
+  tbb::parallel_sort(order.begin(), order.end());
+  return order;
 }
 
 }  // namespace
@@ -63,8 +111,8 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
   const ModelView view = model_view(model);
   return parallel_map(
       "evaluate_points", "points", "result slots", points, results, 256, progress,
-      [&] { return validate_request(request, &view); },
-      [&](const vec3& x) { return evaluate_point(view, x, request); });
+      [&] { return validate_request(request, &view); }, [&](const vec3& x) { return evaluate_point(view, x, request); },
+      [&] { return spatial_order(view.bounds, points); });
 }
 
 Status validate_trace_options(const TraceOptions& options) {
@@ -86,7 +134,7 @@ Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceO
   // Rays cost far more than points (and vary more), so chunks are smaller.
   return parallel_map(
       "trace_rays", "rays", "hit slots", rays, hits, 64, progress, [&] { return validate_trace_options(options); },
-      [&](const Ray& ray) { return trace_surface(view, ray, options); });
+      [&](const Ray& ray) { return trace_surface(view, ray, options); }, [] { return std::vector<uint64_t>(); });
 }
 
 }  // namespace gwnrt
