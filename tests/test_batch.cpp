@@ -91,6 +91,26 @@ TEST_P(BatchOnRealMeshes, BitIdenticalToSinglePointsInInputOrder) {
   for (size_t i = 0; i < points.size(); ++i) ASSERT_TRUE(identical(results[i], straight[perm[i]])) << "point " << i;
 }
 
+TEST_P(BatchOnRealMeshes, LargeBatchVisitedInSpatialOrderAnswersInInputOrder) {
+  // Batches of 16384 points and more are evaluated in Morton order (batch.cpp): every result
+  // must still be the single-point answer at its own index, also for points far outside the box
+  // (clamped to its faces in the order) and for a non-finite point.
+  const GwnModel model = build_model(load_test_mesh(GetParam()));
+  std::vector<vec3> points = sample_points(mesh_bounds(model.mesh()), 40000, 23);
+  points[17] = vec3(1e30f, -1e30f, 0.0f);
+  points[40] = vec3(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+  const ModelView view = model_view(model);
+  for (const WindingMethod method : {WindingMethod::kTaylor, WindingMethod::kCrossing}) {
+    QueryRequest request;
+    request.method = method;
+    request.fields = kFieldW | kFieldGradient;
+    const std::vector<PointResult> batch = run_batch(model, points, request);
+    for (size_t i = 0; i < points.size(); ++i)
+      ASSERT_TRUE(identical(batch[i], evaluate_point(view, points[i], request)))
+          << winding_method_name(method) << " point " << i;
+  }
+}
+
 TEST_P(BatchOnRealMeshes, ThreadCountDoesNotChangeResults) {
   const GwnModel model = build_model(load_test_mesh(GetParam()));
   const std::vector<vec3> points = sample_points(mesh_bounds(model.mesh()), 5000, 22);

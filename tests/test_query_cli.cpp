@@ -177,6 +177,38 @@ TEST_F(QueryCliTest, ExactAgreesWithTree) {
   for (size_t i = 0; i < a.rows.size(); ++i) EXPECT_NEAR(a.rows[i].at(3), b.rows[i].at(3), 2e-3) << "row " << i;
 }
 
+TEST_F(QueryCliTest, MethodsAgreeAndCrossingIsExact) {
+  // --method crossing against --method brute (the double reference): within the crossing
+  // method's 1e-5 (the probe points are not within 1e-5 of the diagonal from the mesh); taylor
+  // within the tree's 2e-3; auto (the default) is crossing on bunny_holes, and says so.
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --verbose";
+  const RunResult brute = run_query(binary_, base + " --method brute");
+  const RunResult crossing = run_query(binary_, base + " --method crossing");
+  const RunResult taylor = run_query(binary_, base + " --method taylor");
+  const RunResult automatic = run_query(binary_, base);
+  for (const RunResult* r : {&brute, &crossing, &taylor, &automatic}) ASSERT_EQ(r->exit_code, 0) << r->err;
+  EXPECT_NE(automatic.err.find("w by crossing (--method auto)"), std::string::npos) << automatic.err;
+  EXPECT_EQ(automatic.out, crossing.out);
+  const Csv b = parse_csv(brute.out), c = parse_csv(crossing.out), t = parse_csv(taylor.out);
+  ASSERT_EQ(b.rows.size(), c.rows.size());
+  ASSERT_EQ(b.rows.size(), t.rows.size());
+  ASSERT_FALSE(b.rows.empty());
+  for (size_t i = 0; i < b.rows.size(); ++i) {
+    EXPECT_NEAR(c.rows[i].at(3), b.rows[i].at(3), 1e-5) << "row " << i;
+    EXPECT_NEAR(t.rows[i].at(3), b.rows[i].at(3), 2e-3) << "row " << i;
+  }
+  // --exact is --method brute, and the two may not be combined.
+  const RunResult exact = run_query(binary_, base + " --exact");
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  EXPECT_EQ(exact.out, brute.out);
+  for (const std::string& bad : {std::string(" --method exactly"), std::string(" --exact --method taylor")}) {
+    const RunResult r = run_query(binary_, base + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_NE(r.err.find("--method"), std::string::npos) << bad << ": " << r.err;
+    EXPECT_TRUE(r.out.empty()) << bad;
+  }
+}
+
 TEST_F(QueryCliTest, ReadsPointsFromStdin) {
   const RunResult from_file = run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()));
   const RunResult from_stdin = run_query(binary_, quote(mesh_path()) + " --points -", probe_points_path());
