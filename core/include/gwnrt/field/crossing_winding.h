@@ -82,26 +82,23 @@ struct ConeCrossingSum {
     }
   }
 
-  // Consecutive cone triangles share their apex (one per loop) and usually a boundary vertex (b
-  // of one is a of the next in leaf order): their lengths are reused, not recomputed.
-  vec3 last_apex{kInfinity}, last_b{kInfinity};
-  dvec3 g0{0.0};
-  double l0 = 0.0, last_l2 = 0.0;
+  FanCorners corners;  // reuses the apex's and the shared vertex's lengths
 
-  // One near cone triangle; `ray_meets` whether the ray meets its leaf's box at all.
-  GWNRT_HD void near(const vec3& apex, const vec3& a, const vec3& b, bool ray_meets) {
+  // A far cluster: its expansion, and when the ray passes through its box, its crossings.
+  GWNRT_HD void far(uint32_t node, int lane, const vec3& d) {
+    add_cluster_far_field<2, WantGradient, WantHessian>(cone, node, lane, d, far_field);
+    if (stats) ++stats->cone_far;
+    const WideNode& n = cone.bvh.nodes[node];
+    if (axis_ray_meets_lane(n, lane, frame, 0.0f)) add_crossings_below(n, lane);
+  }
+
+  // A near cone triangle, summed exactly.
+  GWNRT_HD void near(uint32_t, const vec3& apex, const vec3& a, const vec3& b) {
     const dvec3 xd(x);
-    if (!(apex == last_apex)) {
-      last_apex = apex;
-      g0 = dvec3(apex) - xd;
-      l0 = glm::length(g0);
-    }
-    const dvec3 g1 = dvec3(a) - xd, g2 = dvec3(b) - xd;
-    const double l1 = a == last_b ? last_l2 : glm::length(g1), l2 = glm::length(g2);
-    last_b = b;
-    last_l2 = l2;
+    corners.next(xd, apex, a, b);
     const SolidAngleTangent<double> tangent =
-        solid_angle_tangent(g0, g1, g2, l0, l1, l2, glm::cross(g1, g2), glm::dot(g1, g2));
+        solid_angle_tangent(corners.g0, corners.g1, corners.g2, corners.l0, corners.l1, corners.l2,
+                            glm::cross(corners.g1, corners.g2), glm::dot(corners.g1, corners.g2));
     // -0 + 0 = +0: x on the triangle's plane counts as on its positive side, for the angle and
     // the crossing alike.
     const double numerator = tangent.numerator + 0.0;
@@ -109,11 +106,18 @@ struct ConeCrossingSum {
     // defined; the caller moves x off C (w is continuous there, C is not part of M).
     on_cone |= numerator == 0.0 && tangent.denominator <= 0.0;
     near_half_angles.add(numerator, tangent.denominator);
+    // The crossing test only where the ray's line passes within the triangle's bounds across it
+    // (most near triangles are beside the ray: 8 comparisons instead of the test).
+    const float ox = frame.origin[frame.kx], oy = frame.origin[frame.ky];
+    const bool beside = (ox < min_of(apex[frame.kx], min_of(a[frame.kx], b[frame.kx]))) |
+                        (ox > max_of(apex[frame.kx], max_of(a[frame.kx], b[frame.kx]))) |
+                        (oy < min_of(apex[frame.ky], min_of(a[frame.ky], b[frame.ky]))) |
+                        (oy > max_of(apex[frame.ky], max_of(a[frame.ky], b[frame.ky])));
     float t;
     int jump;
     // numerator = n·(apex − x): the plane lies ahead along the ray when it and n·direction (the
     // opposite sign of jump) agree.
-    if (ray_meets && triangle_crossing<true>(frame, apex, a, b, t, jump) && (numerator >= 0.0 ? jump < 0 : jump > 0)) {
+    if (!beside && triangle_crossing<true>(frame, apex, a, b, t, jump) && (numerator >= 0.0 ? jump < 0 : jump > 0)) {
       jumps += jump;
       if (stats) ++stats->cone_crossings;
     }
@@ -130,37 +134,7 @@ struct ConeCrossingSum {
   }
 
   GWNRT_HD void traverse() {
-    if (cone.bvh.node_count == 0) return;
-    uint32_t stack[kTraversalStackSize];
-    int sp = 0;
-    stack[sp++] = 0;
-    const float inner_scale2 = beta * beta;
-    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
-    while (sp > 0) {
-      const uint32_t ni = stack[--sp];
-      const WideNode& node = cone.bvh.nodes[ni];
-      const WideNodeExpansion& ex = cone.expansion[ni];
-      for (int l = 0; l < kBvhWidth; ++l) {
-        const vec3 d(ex.centre[0][l] - x.x, ex.centre[1][l] - x.y, ex.centre[2][l] - x.z);
-        const float scale2 = node.count[l] == 0 ? inner_scale2 : leaf_scale2;
-        // Empty lanes have a NaN centre, so they never pass this test.
-        if (glm::dot(d, d) > scale2 * ex.radius[l] * ex.radius[l]) {
-          add_cluster_far_field<2, WantGradient, WantHessian>(cone, ni, l, d, far_field);
-          if (stats) ++stats->cone_far;
-          if (axis_ray_meets_lane(node, l, frame, 0.0f)) add_crossings_below(node, l);
-          continue;
-        }
-        const uint32_t child = node.child[l];
-        if (child == kEmptyLane) continue;
-        if (node.count[l] == 0) {
-          stack[sp++] = child;
-          continue;
-        }
-        const bool ray_meets = axis_ray_meets_lane(node, l, frame, 0.0f);
-        for (uint32_t t = child; t < child + node.count[l]; ++t)
-          near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], ray_meets);
-      }
-    }
+    if (cone.bvh.node_count > 0) visit_multipole(cone, x, beta, *this);
   }
 };
 

@@ -93,6 +93,24 @@ GWNRT_FORCEINLINE uint32_t lane_bits(M m) {
   return bits;
 }
 
+// Four doubles, where the CPU has 256-bit registers: exact products of floats (the ray's edge
+// functions, trace/ray.h) four at a time. Without AVX the callers keep their scalar loops.
+#if defined(__AVX__)
+typedef double d4 __attribute__((vector_size(32)));
+typedef int64_t l4 __attribute__((vector_size(32)));
+
+// Bit i set when lane i of a comparison of d4s is true.
+GWNRT_FORCEINLINE uint32_t lane_bits64(l4 m) {
+#if defined(__x86_64__) || defined(__i386__)
+  return uint32_t(_mm256_movemask_pd(__m256d(m)));
+#else
+  uint32_t bits = 0;
+  for (int i = 0; i < 4; ++i) bits |= (m[i] != 0 ? 1u : 0u) << i;
+  return bits;
+#endif
+}
+#endif
+
 template <class V>
 GWNRT_FORCEINLINE float lane_sum(V v) {
   float s = 0.0f;

@@ -113,6 +113,28 @@ struct UnwrappedAngleSum {
   GWNRT_HD double angle() const { return atan2(im, re) + 2.0 * kPi * double(wraps); }
 };
 
+// The corners of a fan's triangles (apex, a, b) relative to x, in double, visited in order:
+// consecutive triangles of the cone C share their apex (one per boundary loop) and usually a
+// vertex (b of one is a of the next in leaf order), so those lengths are reused, not recomputed.
+struct FanCorners {
+  dvec3 g0{0.0}, g1{0.0}, g2{0.0};  // apex, a, b relative to x
+  double l0 = 0.0, l1 = 0.0, l2 = 0.0;
+  vec3 last_apex{__builtin_huge_valf()}, last_b{__builtin_huge_valf()};
+
+  GWNRT_HD void next(const dvec3& x, const vec3& apex, const vec3& a, const vec3& b) {
+    if (!(apex == last_apex)) {
+      last_apex = apex;
+      g0 = dvec3(apex) - x;
+      l0 = glm::length(g0);
+    }
+    g1 = dvec3(a) - x;
+    g2 = dvec3(b) - x;
+    l1 = a == last_b ? l2 : glm::length(g1);
+    l2 = glm::length(g2);
+    last_b = b;
+  }
+};
+
 namespace detail {
 
 // One edge's Biot–Savart term of ∇Ω for the edge g_i → g_j (g = vertex - x). Zero when x lies

@@ -67,23 +67,12 @@ struct PhaseSum {
   // In double: the cone's inner edges (apex to boundary) are singular lines of each of their
   // two triangles' terms, which cancel; in float, the rounding of x relative to such an edge
   // leaves φ with errors of 1e-4 within 1e-3 of it, enough for a step to skip a level there.
-  // Consecutive cone triangles share their apex (one per loop) and usually a boundary vertex
-  // (b of one is a of the next in leaf order): their lengths are reused, not recomputed.
-  vec3 last_apex{kInfinity}, last_b{kInfinity};
-  dvec3 g0{0.0};
-  double l0 = 0.0, last_l2 = 0.0;
+  FanCorners corners;  // reuses the apex's and the shared vertex's lengths
 
   GWNRT_HD void near(uint32_t t, const vec3& apex, const vec3& a, const vec3& b) {
-    const dvec3 xd(x);
-    if (!(apex == last_apex)) {
-      last_apex = apex;
-      g0 = dvec3(apex) - xd;
-      l0 = glm::length(g0);
-    }
-    const dvec3 g1 = dvec3(a) - xd, g2 = dvec3(b) - xd;
-    const double l1 = a == last_b ? last_l2 : glm::length(g1), l2 = glm::length(g2);
-    last_b = b;
-    last_l2 = l2;
+    corners.next(dvec3(x), apex, a, b);
+    const dvec3 &g0 = corners.g0, &g1 = corners.g1, &g2 = corners.g2;
+    const double l0 = corners.l0, l1 = corners.l1, l2 = corners.l2;
     const dvec3 c12 = glm::cross(g1, g2);
     const double d12 = glm::dot(g1, g2);
     const SolidAngleTangent<double> tangent = solid_angle_tangent(g0, g1, g2, l0, l1, l2, c12, d12);
@@ -109,7 +98,8 @@ struct PhaseSum {
 template <bool WantGradient>
 GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta, bool exact) {
   // The exact reference reads every triangle as near: the bound from each segment alone.
-  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, dvec3(0.0)};
+  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, dvec3(0.0), kInfinity, 0.0f,
+                             {}};
   visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
   PhaseSample out;
   float w;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "gwnrt/field/distance.h"
+#include "gwnrt/field/lanes.h"
 #include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
@@ -60,8 +61,13 @@ namespace detail {
 // The projected edge function Qx·Py − Qy·Px at the ray. The products of floats are exact in
 // double, so the value for edge P→Q is exactly the negation of the value for Q→P whatever the
 // compiler contracts.
+// A template over the lane type (double, or the host's d4 of four triangles at once).
+template <class D>
+GWNRT_HD GWNRT_FORCEINLINE D edge_value_of(D px, D py, D qx, D qy) {
+  return qx * py - qy * px;
+}
 GWNRT_HD GWNRT_FORCEINLINE double edge_value(float px, float py, float qx, float qy) {
-  return double(qx) * double(py) - double(qy) * double(px);
+  return edge_value_of<double>(px, py, qx, qy);
 }
 
 // Its sign at the perturbed ray: a zero value is decided by the perturbation, which keeps the
@@ -224,20 +230,88 @@ GWNRT_HD inline int crossing_sum(const BvhView& bvh, const vec3* vertices, const
 // triangle whose vertices all lie on one side of the origin in x or y keeps those strict signs
 // after rounding, so triangle_crossing misses it too; and a triangle entirely behind t_min gives
 // a t that is a convex combination of values behind it.
-GWNRT_HD GWNRT_FORCEINLINE bool axis_ray_meets_lane(const WideNode& node, int lane, const RayFrame& f, float t_min) {
+// A template over the lane type: float for one lane, the host's f4 for a node's four (the
+// result is then a lane mask).
+namespace detail {
+template <class V>
+GWNRT_HD GWNRT_FORCEINLINE auto axis_box_meets(V lo_x, V hi_x, V lo_y, V hi_y, V lo_z, V hi_z, const RayFrame& f,
+                                               float t_min) {
   const float ox = f.origin[f.kx], oy = f.origin[f.ky], oz = f.origin[f.kz];
-  const bool in_xy = (node.lo[f.kx][lane] <= ox) & (ox <= node.hi[f.kx][lane]) & (node.lo[f.ky][lane] <= oy) &
-                     (oy <= node.hi[f.ky][lane]);
-  const bool ahead = f.sz > 0.0f ? node.hi[f.kz][lane] - oz >= t_min : oz - node.lo[f.kz][lane] >= t_min;
+  const auto in_xy = (lo_x <= ox) & (ox <= hi_x) & (lo_y <= oy) & (oy <= hi_y);
+  const auto ahead = f.sz > 0.0f ? hi_z - oz >= t_min : oz - lo_z >= t_min;
   return in_xy & ahead;
 }
+}  // namespace detail
 
-// The same for the four lanes at once, as a bit mask (written without branches, so that the
-// compiler tests the lanes together). Empty lanes have inverted boxes and never pass.
+GWNRT_HD GWNRT_FORCEINLINE bool axis_ray_meets_lane(const WideNode& node, int lane, const RayFrame& f, float t_min) {
+  return detail::axis_box_meets<float>(node.lo[f.kx][lane], node.hi[f.kx][lane], node.lo[f.ky][lane],
+                                       node.hi[f.ky][lane], node.lo[f.kz][lane], node.hi[f.kz][lane], f, t_min);
+}
+
+// The same for the four lanes at once, as a bit mask. Empty lanes have inverted boxes and never
+// pass. On the host as one f4 test: the compiler kept the lane loop scalar (runtime axis
+// indices), and on the 871k dragon's sheet rays that was the largest part of the walk.
 GWNRT_HD GWNRT_FORCEINLINE uint32_t axis_ray_lane_mask(const WideNode& node, const RayFrame& f, float t_min) {
+#if GWNRT_HOST_LANES
+  return lane_bits(detail::axis_box_meets<f4>(load4(node.lo[f.kx]), load4(node.hi[f.kx]), load4(node.lo[f.ky]),
+                                              load4(node.hi[f.ky]), load4(node.lo[f.kz]), load4(node.hi[f.kz]), f,
+                                              t_min));
+#else
   uint32_t mask = 0;
   for (int l = 0; l < kBvhWidth; ++l) mask |= uint32_t(axis_ray_meets_lane(node, l, f, t_min)) << l;
   return mask;
+#endif
+}
+
+// The crossings of an axis ray with one leaf's triangles [first, first + count), t >= t_min, in
+// index order. On the host with AVX, four triangles at a time: their edge values (exact in
+// double, as in triangle_crossing) reject every triangle whose three values are nonzero and of
+// mixed signs, which is exactly triangle_crossing's own early miss; every other one (a possible
+// crossing, or an exact zero that needs the tie-break) goes through triangle_crossing itself,
+// so the answers are its answers.
+template <class Visitor>
+GWNRT_HD GWNRT_FORCEINLINE void visit_axis_leaf(const vec3* vertices, uint32_t first, uint32_t count, const RayFrame& f,
+                                                float t_min, Visitor& visit) {
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  const float ox = f.origin[f.kx], oy = f.origin[f.ky];
+  const int kx = f.kx, ky = f.ky;
+  for (uint32_t base = first; base < first + count; base += 4) {
+    const uint32_t n = first + count - base < 4 ? first + count - base : 4;
+    f4 ax, ay, bx, by, cx, cy;
+    for (uint32_t m = 0; m < 4; ++m) {
+      const vec3* p = vertices + 3 * (base + (m < n ? m : 0));  // lanes past the leaf repeat its first
+      ax[m] = p[0][kx] - ox;
+      ay[m] = p[0][ky] - oy;
+      bx[m] = p[1][kx] - ox;
+      by[m] = p[1][ky] - oy;
+      cx[m] = p[2][kx] - ox;
+      cy[m] = p[2][ky] - oy;
+    }
+    const d4 dax = __builtin_convertvector(ax, d4), day = __builtin_convertvector(ay, d4);
+    const d4 dbx = __builtin_convertvector(bx, d4), dby = __builtin_convertvector(by, d4);
+    const d4 dcx = __builtin_convertvector(cx, d4), dcy = __builtin_convertvector(cy, d4);
+    const d4 u = detail::edge_value_of(dbx, dby, dcx, dcy), v = detail::edge_value_of(dcx, dcy, dax, day),
+             w = detail::edge_value_of(dax, day, dbx, dby);
+    const d4 zero{};
+    const l4 mixed = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
+    const l4 tie = (u == zero) | (v == zero) | (w == zero);
+    uint32_t maybe = lane_bits64(tie | ~mixed) & ((1u << n) - 1u);
+    for (; maybe != 0; maybe &= maybe - 1) {
+      const uint32_t i = base + uint32_t(lowest_set_bit(maybe));
+      float t;
+      int jump;
+      if (triangle_crossing<true>(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump) && t >= t_min)
+        visit(i, t, jump);
+    }
+  }
+#else
+  for (uint32_t i = first; i < first + count; ++i) {
+    float t;
+    int jump;
+    if (triangle_crossing<true>(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump) && t >= t_min)
+      visit(i, t, jump);
+  }
+#endif
 }
 
 // Calls visit(leaf index, t, jump) for every crossing of the axis ray's line with t >= t_min
@@ -255,16 +329,16 @@ GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertic
     for (uint32_t mask = axis_ray_lane_mask(node, f, t_min); mask != 0; mask &= mask - 1) {
       const int l = lowest_set_bit(mask);
       if (node.count[l] == 0) {
+#if GWNRT_HOST_LANES
+        // The walk is bound by node loads (perf on the dragon's sheet rays: the node's first
+        // load and its child fetch took the largest shares): start each child's load now.
+        __builtin_prefetch(bvh.nodes + node.child[l]);
+        __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes + node.child[l]) + 64);  // a node is 2 lines
+#endif
         stack[sp++] = node.child[l];
         continue;
       }
-      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
-        float t;
-        int jump;
-        if (triangle_crossing<true>(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump) &&
-            t >= t_min)
-          visit(i, t, jump);
-      }
+      visit_axis_leaf(vertices, node.child[l], node.count[l], f, t_min, visit);
     }
   }
 }
