@@ -223,6 +223,28 @@ TEST(CrossingWinding, RaysExactlyThroughVerticesAndEdgesOfMeshAndCone) {
   }
 }
 
+TEST(CrossingWinding, PointsExactlyOnTheConeAtTheOrigin) {
+  // The holed grid cube moved down by 1: its hole lies in the plane z = 0 and its cone is the
+  // flat square there with the apex at the origin. Points exactly on it (the apex itself, on an
+  // inner edge, inside a cone triangle, on the hole's rim line's extension) have w_C undefined;
+  // w is continuous there and must match the brute force. Coordinates near 0 must still be moved
+  // far enough off the cone to leave it (a move by ulps of x alone would not).
+  Mesh mesh = holed_grid_cube();
+  for (vec3& p : mesh.positions) p.z -= 1.0f;
+  const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
+  const GwnModel model = build_model(std::move(mesh));
+  const ModelView v = model.view();
+  ASSERT_EQ(v.cone.triangle_count, 8u);
+  const vec3 points[] = {{0.0f, 0.0f, 0.0f},   {0.25f, 0.0f, 0.0f},  {0.0f, -0.25f, 0.0f}, {0.1f, 0.2f, 0.0f},
+                         {-0.3f, 0.05f, 0.0f}, {0.25f, 0.25f, 0.0f}, {1e-30f, 0.0f, 0.0f}, {0.0f, 0.0f, 1e-20f}};
+  for (const vec3& x : points) {
+    const double want = reference::reference_w(ref, dvec3(x));
+    const float w = winding_number_crossing<false, false>(v, x).w, w_all = winding_number_crossing<true, true>(v, x).w;
+    EXPECT_NEAR(w, want, kCrossingTolerance) << x.x << ", " << x.y << ", " << x.z;
+    EXPECT_NEAR(w_all, want, kCrossingTolerance) << x.x << ", " << x.y << ", " << x.z;
+  }
+}
+
 // Central differences of the brute-force w: ∇w with h = 1e-4·diag (truncation (h/d)²/6 < 1e-6
 // of |∇w| at d >= 0.05·diag; rounding 1e-14/h), H_w from second differences.
 dvec3 difference_gradient(const reference::ReferenceMesh& ref, const dvec3& x, double h) {

@@ -102,9 +102,12 @@ struct ConeCrossingSum {
     // -0 + 0 = +0: x on the triangle's plane counts as on its positive side, for the angle and
     // the crossing alike.
     const double numerator = tangent.numerator + 0.0;
-    // Exactly on the triangle (in its plane, not outside it): w_C jumps there and the side is not
-    // defined; the caller moves x off C (w is continuous there, C is not part of M).
-    on_cone |= numerator == 0.0 && tangent.denominator <= 0.0;
+    // On the triangle (in its plane, not outside it), up to double round-off relative to its
+    // corners' distances: w_C jumps there and the side is not defined, so the caller moves x off
+    // C (w is continuous there, C is not part of M). On an edge the denominator is 0 only up to
+    // that round-off (found at a point on an inner edge of an axis-aligned cap).
+    const double round_off = 1e-12 * corners.l0 * corners.l1 * corners.l2;
+    on_cone |= fabs(numerator) <= round_off && tangent.denominator <= round_off;
     near_half_angles.add(numerator, tangent.denominator);
     // The crossing test only where the ray's line passes within the triangle's bounds across it
     // (most near triangles are beside the ray: 8 comparisons instead of the test).
@@ -144,11 +147,14 @@ struct ConeCrossingSum {
 // cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M, where
 // the side of M that x is on is itself a matter of round-off.
 // x exactly on a cone triangle (found in the traversal: the tangent's numerator 0 and its
-// denominator <= 0) is moved by this many ulps of its largest coordinate along a fixed direction,
-// up to kConeNudgeTries times (each 8x farther): w is continuous there, so the moved point has
-// the same w up to the move times |∇w|. It happens where x and a cap of ∂M share exact
-// coordinates (an axis-aligned hole and a grid of query points in its plane).
-inline constexpr float kConeNudgeUlps = 4.0f;
+// denominator <= 0) is moved along a fixed direction by this many ulps of its largest coordinate,
+// or, near the origin, by 2^-40 of the model's box (the least that moves the corners relative to
+// x in double), up to kConeNudgeTries times (each 8x farther): w is continuous there, so the
+// moved point has the same w up to the move times |∇w| (measured 2e-6 at most beside the
+// teapot's rims, 2 ulps; 4 ulps gave 7e-6, the box's ulps 1.6e-5). It happens where x and a cap
+// of ∂M share exact coordinates (an axis-aligned hole and a grid of query points in its plane;
+// the hole's centre, its cone's apex, at the origin).
+inline constexpr float kConeNudgeUlps = 2.0f;
 inline constexpr int kConeNudgeTries = 4;
 
 template <bool WantGradient, bool WantHessian>
@@ -157,8 +163,10 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
                                                                                                : kConeBeta,
                                                CrossingStats* stats = nullptr) {
   vec3 x = x_in;
-  const float scale = max_of(fabsf(x.x), max_of(fabsf(x.y), fabsf(x.z))) * 1.2e-7f;  // about 1 ulp
-  float nudge = kConeNudgeUlps * max_of(scale, 1e-30f);
+  const vec3 extent = m.bounds.hi - m.bounds.lo;
+  const float largest = max_of(fabsf(x.x), max_of(fabsf(x.y), fabsf(x.z)));
+  // 1.2e-7: about one ulp; 9.1e-13: 2^-40.
+  float nudge = max_of(kConeNudgeUlps * 1.2e-7f * largest, 9.1e-13f * max_of(extent.x, max_of(extent.y, extent.z)));
   for (int attempt = 0;; ++attempt) {
     const RayFrame frame = shortest_exit_axis_ray(m.bounds, x);
     detail::ConeCrossingSum<WantGradient, WantHessian> cone(m.cone, frame, x, cone_beta, stats);
