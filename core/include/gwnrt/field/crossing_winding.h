@@ -15,8 +15,9 @@ namespace gwnrt {
 
 // The cone's clusters are expanded (order 2) only beyond this multiple of their radius. The
 // crossing method promises |Δw| <= 1e-5 and ∇w to a relative 1e-4, where the tree's beta = 2
-// gives 1e-3; measured max |Δw| over the bench's point mix (bunny_holes, teapot): beta 2:
-// 3.6e-4, 1.1e-3; 4: 2.5e-5, 5.9e-5; 6: 3.6e-6, 8.6e-6; 8: 9.5e-7, 2.1e-6.
+// gives 1e-3; measured max |Δw| over 3000 points of the bench's mix (bunny_holes, the teapot, a
+// random non-manifold soup of 300 triangles with 724 cone triangles): beta 4: 6.0e-6, 6.9e-6,
+// 1.1e-5; 5: 2.3e-6, -, 2.0e-6; 6: 6.6e-7, 5.1e-7, 4.4e-7; 8: 1.3e-7, 1.3e-7, 4.4e-7.
 inline constexpr float kConeBeta = 6.0f;
 // ∇w and H_w (relative 1e-4 promised) need more: measured max error over tolerance on
 // bunny_holes and the teapot (points beyond 0.05 of the diagonal from M): beta 6: 17, 30; 8: 3.6,
