@@ -419,6 +419,52 @@ TEST_P(BvhOnRealMeshes, StructureIsSound) {
   EXPECT_EQ(sids.size(), model.boundary().segment_count());
 }
 
+// filter_triangle_tree (the sheet tree of a mesh that is mostly sheets): the base tree's
+// topology over a subset, which must hold exactly the kept triangles, keep the structure's
+// rules (boxes, balls, every kept triangle in one leaf) and evaluate the subset's w as a built
+// tree does (order 2, beta 2: within the 2e-3 of TaylorOnRealMeshes).
+TEST_P(BvhOnRealMeshes, FilteredTreeHoldsExactlyTheKeptTriangles) {
+  const GwnModel model = build_model(load_test_mesh(GetParam()));
+  const Mesh& mesh = model.mesh();
+  const size_t n = mesh.triangles.size();
+  std::mt19937 rng(77);
+  for (const double fraction : {0.0, 0.002, 0.7, 1.0}) {
+    std::vector<uint8_t> keep(n, 0);
+    std::vector<uint32_t> kept;
+    for (uint32_t t = 0; t < n; ++t)
+      if (std::uniform_real_distribution<double>(0.0, 1.0)(rng) < fraction || (fraction > 0 && t == n / 2)) {
+        keep[t] = 1;
+        kept.push_back(t);
+      }
+    TriangleTree tree;
+    ASSERT_TRUE(filter_triangle_tree(model.triangle_tree(), keep, tree).ok());
+    std::vector<uint32_t> ids = tree.triangle_ids;
+    std::sort(ids.begin(), ids.end());
+    ASSERT_EQ(ids, kept) << "fraction " << fraction;
+    if (kept.empty()) {
+      EXPECT_EQ(tree.view().triangle_count, 0u);
+      continue;
+    }
+    for (size_t i = 0; i < kept.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(tree.vertices[3 * i + k], mesh.positions[mesh.triangles[tree.triangle_ids[i]][k]]);
+    BvhChecker check(tree);
+    EXPECT_EQ(check.visit(0, 1).size(), kept.size());
+    for (size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(check.leaf_hits[i], 1) << "leaf-order triangle " << i;
+    for (size_t i = 0; i < check.node_hits.size(); ++i) EXPECT_LE(check.node_hits[i], 1) << "node " << i;
+    EXPECT_EQ(check.ball_violations, 0) << check.first_violation;
+    EXPECT_LE(check.max_depth, model.triangle_tree().bvh.depth);
+    const TriangleTreeView view = tree.view();
+    double max_error = 0;
+    for (const vec3& x : sample_points(mesh_bounds(mesh), 200, 5)) {
+      const double exact = winding_number_exact(view, x).w;
+      max_error =
+          std::max(max_error, std::abs(double(winding_number_taylor<2, false, false>(view, x, 2.0f).w) - exact));
+    }
+    EXPECT_LE(max_error, 2e-3) << "fraction " << fraction;
+  }
+}
+
 // The far-field test trusts that no vertex below a lane is farther than radius from centre
 // (bvh.h). Checked in double on the stored float centre and radius with no slack, since those
 // are exactly the numbers the criterion compares.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -149,6 +150,68 @@ Comparison compare_with_brute_force(const std::string& name, const GwnModel& mod
         << name << ": point " << i << " (" << points[i].x << ", " << points[i].y << ", " << points[i].z << ")";
   }
   return c;
+}
+
+// UnwrappedAngleSum (solid_angle.h) is Σ atan2 itself, not modulo 2π, over factors of any
+// magnitude; on the host its four-lane form (each lane a product of its own, added together at
+// the end) gives the same sum. Half the trials take angles of one sign only, so that the running
+// argument winds up to ~100 times.
+TEST(CrossingWinding, UnwrappedAngleSumIsTheSumOfAtan2NotModulo2Pi) {
+  std::mt19937 rng(913);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double max_error = 0, max_turns = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 1 + int(u(rng) * 400);
+    UnwrappedAngleSum sum;
+    long double reference = 0;
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    UnwrappedAngleSumT<d4, l4> lanes;
+    d4 numerators{}, denominators{};
+#endif
+    for (int k = 0; k < n; ++k) {
+      double numerator, denominator;
+      const double type = u(rng);
+      if (type < 0.1) {  // no angle (x on a vertex, zero area)
+        numerator = 0.0;
+        denominator = 0.0;
+      } else if (type < 0.2) {  // on an axis but the negative real one (x inside a triangle's plane, which the callers
+                                // move off)
+        const double m = std::pow(10.0, 80.0 * u(rng) - 40.0);
+        const int axis = int(u(rng) * 3.0);
+        numerator = axis == 0 ? 0.0 : (axis == 1 ? m : -m);
+        denominator = axis == 0 ? m : 0.0;
+      } else {  // an angle in (-π, π), or in (0, π) for odd trials, at a magnitude from 1e-40 to 1e40
+        const double t = trial % 2 ? kPi * u(rng) : kPi * (2.0 * u(rng) - 1.0);
+        const double m = std::pow(10.0, 80.0 * u(rng) - 40.0);
+        numerator = m * std::sin(t);
+        denominator = m * std::cos(t);
+      }
+      if (!(numerator == 0.0 && denominator == 0.0))
+        reference += std::atan2((long double)numerator, (long double)denominator);
+      sum.add(numerator, denominator);
+#if GWNRT_HOST_LANES && defined(__AVX__)
+      numerators[k % 4] = numerator;
+      denominators[k % 4] = denominator;
+      if (k % 4 == 3 || k == n - 1) {
+        for (int l = k % 4 + 1; l < 4; ++l) numerators[l] = denominators[l] = 0.0;  // no angle
+        lanes.add(numerators, denominators);
+      }
+#endif
+    }
+    // Each double product turns the running argument by ~1e-16 rad: 400 of them stay below 1e-13.
+    const double error = std::fabs(sum.angle() - double(reference));
+    EXPECT_LE(error, 1e-12) << "trial " << trial << " n " << n << " sum " << sum.angle() << " reference "
+                            << double(reference);
+    max_error = std::max(max_error, error);
+    max_turns = std::max(max_turns, std::fabs(double(reference)) / (2.0 * kPi));
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    UnwrappedAngleSum from_lanes;
+    add_lanes_to(lanes, from_lanes);
+    EXPECT_LE(std::fabs(from_lanes.angle() - double(reference)), 1e-12) << "trial " << trial << " (four lanes)";
+#endif
+  }
+  EXPECT_GT(max_turns, 50.0);
+  std::printf("[ angle sum     ] max |Σ - Σ atan2| %.3g rad, up to %.0f turns\n", max_error, max_turns);
 }
 
 TEST(CrossingWinding, MatchesBruteForceOnMeshesAndSoups) {

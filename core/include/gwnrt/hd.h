@@ -95,20 +95,26 @@ GWNRT_HD inline float power_of_two_scale(float m) {
   return bits_float(0x7f000000u - exponent);
 }
 
+namespace detail {
+// 2^-e for the binary exponent e of m > 0 on the host, U the integer type of m's bits: a double,
+// or each lane of a vector of doubles (lanes.h).
+template <class D, class U>
+inline D power_of_two_scale_bits(D m) {
+  const U exponent = __builtin_bit_cast(U, m) & (U{} + 0x7ff0000000000000ll);
+  const U largest = U{} + 0x7fd0000000000000ll;
+  return __builtin_bit_cast(D, (U{} + 0x7fe0000000000000ll) - (exponent > largest ? largest : exponent));
+}
+}  // namespace detail
+
 // The same for doubles: 2^-e for the binary exponent e of m > 0 (huge m saturate at 2^-1022,
 // zero or subnormal m get 2^1023).
 GWNRT_HD inline double power_of_two_scale(double m) {
 #if defined(__CUDA_ARCH__)
   uint64_t exponent = uint64_t(__double_as_longlong(m)) & 0x7ff0000000000000ull;
-#else
-  uint64_t exponent = __builtin_bit_cast(uint64_t, m) & 0x7ff0000000000000ull;
-#endif
   exponent = exponent > 0x7fd0000000000000ull ? 0x7fd0000000000000ull : exponent;
-  const uint64_t bits = 0x7fe0000000000000ull - exponent;
-#if defined(__CUDA_ARCH__)
-  return __longlong_as_double((long long)bits);
+  return __longlong_as_double((long long)(0x7fe0000000000000ull - exponent));
 #else
-  return __builtin_bit_cast(double, bits);
+  return detail::power_of_two_scale_bits<double, uint64_t>(m);
 #endif
 }
 

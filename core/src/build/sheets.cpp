@@ -77,11 +77,12 @@ void other_triangles_winding_by_crossings(const ModelView& view, std::span<float
     // whole-number sides, so its w_o is an exact half-integer.
     double w_behind = -double(ahead), w_front = double(stack - ahead);
     if (view.cone.triangle_count > 0) {
-      detail::ConeCrossingSum<false, false> cone_behind(view.cone, frame, behind);
+      using ConeSum = detail::ConeCrossingVisitor<false, false>::type;
+      ConeSum cone_behind(view.cone, frame, behind, kConeBeta, nullptr);
       cone_behind.traverse();
       w_behind += double(cone_behind.jumps) + double(cone_behind.winding());
       const RayFrame front_frame = make_ray_frame(front, direction);
-      detail::ConeCrossingSum<false, false> cone_front(view.cone, front_frame, front);
+      ConeSum cone_front(view.cone, front_frame, front, kConeBeta, nullptr);
       cone_front.traverse();
       w_front += double(cone_front.jumps) + double(cone_front.winding());
     }

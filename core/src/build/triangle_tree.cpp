@@ -2,6 +2,7 @@
 // radius and moments (docs/design.md §2), computed bottom-up in double and stored compressed in float.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
@@ -242,6 +243,77 @@ Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection
     for (int k = 0; k < 3; ++k) tree.vertices[3 * i + k] = mesh.positions[tri[k]];
   });
   if (n > 0) MomentBuilder(tree).run();  // an empty tree has no root to hold moments
+  out = std::move(tree);
+  return Status::Ok();
+}
+
+Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out) {
+  const size_t n = base.triangle_ids.size();
+  for (const uint32_t id : base.triangle_ids)
+    if (id >= keep.size())
+      return {StatusCode::kInvalidArgument, "filter_triangle_tree: triangle " + std::to_string(id) +
+                                                " of the tree is beyond the " + std::to_string(keep.size()) +
+                                                " flags given"};
+  // kept_before[i]: how many of the base's leaf-order triangles before i are kept, their new
+  // leaf-order index.
+  std::vector<uint32_t> kept_before(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) kept_before[i + 1] = kept_before[i] + (keep[base.triangle_ids[i]] != 0 ? 1u : 0u);
+  const uint32_t kept = kept_before[n];
+  TriangleTree tree;
+  if (kept == 0) {  // an empty tree, as a build over no triangles makes it
+    if (Status s = build_wide_bvh({}, 1, tree.bvh); !s.ok()) return s;
+    out = std::move(tree);
+    return Status::Ok();
+  }
+  tree.triangle_ids.resize(kept);
+  tree.vertices.resize(3 * size_t(kept));
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    if (kept_before[i + 1] == kept_before[i]) return;
+    const uint32_t j = kept_before[i];
+    tree.triangle_ids[j] = base.triangle_ids[i];
+    for (int k = 0; k < 3; ++k) tree.vertices[3 * size_t(j) + k] = base.vertices[3 * i + k];
+  });
+  tree.bvh.nodes = base.bvh.nodes;
+  tree.bvh.depth = base.bvh.depth;
+  tree.bvh.primitive_order.resize(kept);
+  for (uint32_t j = 0; j < kept; ++j) tree.bvh.primitive_order[j] = j;
+  // Bottom up: the builder numbers every child after its parent. Lanes left with nothing below
+  // are emptied (an inverted box, as the builder leaves unused lanes); nodes only they reached
+  // stay in the array, unreached.
+  std::vector<uint32_t> kept_below(tree.bvh.nodes.size(), 0);
+  for (size_t k = tree.bvh.nodes.size(); k-- > 0;) {
+    WideNode& node = tree.bvh.nodes[k];
+    uint32_t total = 0;
+    for (int l = 0; l < kBvhWidth; ++l) {
+      if (node.child[l] == kEmptyLane) continue;
+      Aabb box;
+      if (node.count[l] > 0) {
+        const uint32_t first = kept_before[node.child[l]], count = kept_before[node.child[l] + node.count[l]] - first;
+        for (uint32_t t = first; t < first + count; ++t)
+          for (int c = 0; c < 3; ++c) box.extend(tree.vertices[3 * size_t(t) + c]);
+        node.child[l] = count > 0 ? first : kEmptyLane;
+        node.count[l] = count;
+        total += count;
+      } else if (kept_below[node.child[l]] > 0) {
+        const WideNode& child = tree.bvh.nodes[node.child[l]];
+        for (int m = 0; m < kBvhWidth; ++m)
+          if (child.child[m] != kEmptyLane)
+            for (int a = 0; a < 3; ++a) {
+              box.lo[a] = std::min(box.lo[a], child.lo[a][m]);
+              box.hi[a] = std::max(box.hi[a], child.hi[a][m]);
+            }
+        total += kept_below[node.child[l]];
+      } else {
+        node.child[l] = kEmptyLane;
+      }
+      for (int a = 0; a < 3; ++a) {
+        node.lo[a][l] = box.lo[a];
+        node.hi[a][l] = box.hi[a];
+      }
+    }
+    kept_below[k] = total;
+  }
+  MomentBuilder(tree).run();
   out = std::move(tree);
   return Status::Ok();
 }

@@ -24,7 +24,13 @@ namespace gwnrt {
 // Square root of a scalar: the lane-type templates call it unqualified, so the vector overloads
 // below are found the same way.
 GWNRT_HD GWNRT_FORCEINLINE float lane_sqrt(float x) { return sqrtf(x); }
-GWNRT_HD GWNRT_FORCEINLINE float lane_select(bool m, float a, float b) { return m ? a : b; }
+GWNRT_HD GWNRT_FORCEINLINE double lane_abs(double x) { return fabs(x); }
+
+// m ? a : b, lane by lane for lane vectors (GCC's vector conditional) and plainly for scalars.
+template <class M, class V>
+GWNRT_HD GWNRT_FORCEINLINE V lane_select(M m, V a, V b) {
+  return m ? a : b;
+}
 
 #if GWNRT_HOST_LANES
 
@@ -74,11 +80,6 @@ GWNRT_FORCEINLINE V lane_sqrt(V x) {
   return r;
 }
 
-template <class M, class V>
-GWNRT_FORCEINLINE V lane_select(M m, V a, V b) {
-  return m ? a : b;
-}
-
 // Bit i set when lane i of the comparison mask is true.
 template <class M>
 GWNRT_FORCEINLINE uint32_t lane_bits(M m) {
@@ -109,6 +110,23 @@ GWNRT_FORCEINLINE uint32_t lane_bits64(l4 m) {
   return bits;
 #endif
 }
+
+// Correctly rounded, as sqrt is (a non-template overload: preferred to lane_sqrt<V> above).
+GWNRT_FORCEINLINE d4 lane_sqrt(d4 x) {
+#if defined(__x86_64__) || defined(__i386__)
+  return d4(_mm256_sqrt_pd(__m256d(x)));
+#else
+  d4 r;
+  for (int i = 0; i < 4; ++i) r[i] = sqrt(x[i]);
+  return r;
+#endif
+}
+
+GWNRT_FORCEINLINE d4 lane_abs(d4 x) {
+  return __builtin_bit_cast(d4, __builtin_bit_cast(l4, x) & (l4{} + 0x7fffffffffffffffll));
+}
+
+GWNRT_FORCEINLINE d4 power_of_two_scale(d4 m) { return detail::power_of_two_scale_bits<d4, l4>(m); }
 #endif
 
 template <class V>

@@ -3,6 +3,7 @@
 // brute-force reference. Host-and-device.
 #pragma once
 
+#include "gwnrt/field/lanes.h"
 #include "gwnrt/hd.h"
 
 namespace gwnrt {
@@ -92,26 +93,46 @@ struct HalfAngleSum {
 // per term instead of one atan2 (which the crossing method's near cone triangles spent most of
 // their time in), the product rescaled by an exact power of two every 4 factors (a factor is at
 // most 4|a||b||c|: no overflow or underflow for coordinates within 1e15 of each other).
-struct UnwrappedAngleSum {
-  double re = 1.0, im = 0.0;
-  int wraps = 0;
+// T = double with W = int, or on the host d4 with l4 (lanes.h): four independent products, a
+// lane each, which the caller adds together at the end (add_lanes_to). A factor 0 (x on a
+// vertex, a zero-area triangle) has no angle: it is taken as 1.
+template <class T, class W>
+struct UnwrappedAngleSumT {
+  T re = T{} + 1.0, im = T{};
+  W wraps = W{};
   uint32_t unscaled = 0;
-  GWNRT_HD void add(double numerator, double denominator) {
-    if (numerator == 0.0 && denominator == 0.0) return;  // no angle (x on a vertex, zero area)
-    const double r = re * denominator - im * numerator, i = re * numerator + im * denominator;
-    const bool up = im >= 0.0 && numerator >= 0.0, down = im < 0.0 && numerator < 0.0;
-    wraps += (up && i < 0.0) ? 1 : ((down && i >= 0.0) ? -1 : 0);
+  GWNRT_HD GWNRT_FORCEINLINE void add(T numerator, T denominator) {
+    const T zero{};
+    denominator = lane_select((numerator == zero) & (denominator == zero), zero + 1.0, denominator);
+    const T r = re * denominator - im * numerator, i = re * numerator + im * denominator;
+    const auto up = (im >= zero) & (numerator >= zero), down = (im < zero) & (numerator < zero);
+    wraps += lane_select(up & (i < zero), W{} + 1, W{}) - lane_select(down & (i >= zero), W{} + 1, W{});
     re = r;
     im = i;
     if (++unscaled == 4) {
-      const double scale = power_of_two_scale(fabs(re) > fabs(im) ? fabs(re) : fabs(im));
+      const T abs_re = lane_abs(re), abs_im = lane_abs(im);
+      const T scale = power_of_two_scale(lane_select(abs_re > abs_im, abs_re, abs_im));
       re *= scale;
       im *= scale;
       unscaled = 0;
     }
   }
+};
+
+struct UnwrappedAngleSum : UnwrappedAngleSumT<double, int> {
   GWNRT_HD double angle() const { return atan2(im, re) + 2.0 * kPi * double(wraps); }
 };
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// The four lanes' products as factors of one scalar sum (each lane's argument is in (−π, π],
+// its wraps counted apart).
+GWNRT_FORCEINLINE void add_lanes_to(const UnwrappedAngleSumT<d4, l4>& lanes, UnwrappedAngleSum& sum) {
+  for (int l = 0; l < 4; ++l) {
+    sum.add(lanes.im[l], lanes.re[l]);
+    sum.wraps += int(lanes.wraps[l]);
+  }
+}
+#endif
 
 // The corners of a fan's triangles (apex, a, b) relative to x, in double, visited in order:
 // consecutive triangles of the cone C share their apex (one per boundary loop) and usually a

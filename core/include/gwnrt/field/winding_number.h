@@ -68,6 +68,12 @@ concept FarLanesVisitor = requires(Visitor& v, uint32_t node, i4 mask, f4 d) {
   v.prefetch(node);  // a node about to be visited: what far_lanes would read
 };
 
+// One that also takes a near leaf's triangles [first, first + count) at once.
+template <class Visitor>
+concept NearLeafVisitor = requires(Visitor& v, uint32_t first) {
+  v.near_leaf(first, first);
+};
+
 namespace detail {
 
 // visit_multipole for a FarLanesVisitor: the four lanes' tests and expansions at once, and the
@@ -106,8 +112,12 @@ GWNRT_FORCEINLINE void visit_multipole_lanes(const TriangleTreeView& tree, const
     visitor.far_lanes(ni, far, dx, dy, dz);
     for (uint32_t leaves = near_bits & ~inner_bits; leaves != 0; leaves &= leaves - 1) {
       const int l = lowest_set_bit(leaves);
-      for (uint32_t t = node.child[l]; t < node.child[l] + node.count[l]; ++t)
-        visitor.near(t, tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2]);
+      if constexpr (NearLeafVisitor<Visitor>) {
+        visitor.near_leaf(node.child[l], node.count[l]);
+      } else {
+        for (uint32_t t = node.child[l]; t < node.child[l] + node.count[l]; ++t)
+          visitor.near(t, tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2]);
+      }
     }
   }
 }
@@ -192,19 +202,79 @@ struct TaylorSum {
 };
 
 #if GWNRT_HOST_LANES
-// The solid angle of triangles given by their corners relative to x, a lane per triangle: the
-// van Oosterom–Strackee tangent of triangle_solid_angle (solid_angle.h), in lane vectors.
+// Van Oosterom–Strackee's tangent (solid_angle.h) of triangles given by their corners relative
+// to x, a lane per triangle, and the product of the corners' lengths (the scale of its round-off).
 template <class V>
-GWNRT_FORCEINLINE V lane_solid_angle(const V a[3], const V b[3], const V c[3]) {
+struct LaneTangent {
+  V numerator, denominator, length_product;
+};
+template <class V>
+GWNRT_FORCEINLINE LaneTangent<V> lane_solid_angle_tangent(const V a[3], const V b[3], const V c[3]) {
   const V la = lane_sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
   const V lb = lane_sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
   const V lc = lane_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   const V bc0 = b[1] * c[2] - b[2] * c[1], bc1 = b[2] * c[0] - b[0] * c[2], bc2 = b[0] * c[1] - b[1] * c[0];
-  const V numerator = a[0] * bc0 + a[1] * bc1 + a[2] * bc2;
   const V ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2],
           ca = c[0] * a[0] + c[1] * a[1] + c[2] * a[2];
-  const V denominator = solid_angle_denominator(la, lb, lc, ab, bc, ca);
-  return 2.0f * lane_atan2(numerator, denominator);
+  return {a[0] * bc0 + a[1] * bc1 + a[2] * bc2, solid_angle_denominator(la, lb, lc, ab, bc, ca), la * lb * lc};
+}
+
+// Near triangles collected until a lane vector of Width is full: corners[3 * j + k][lane] is
+// coordinate k of corner j.
+template <int Width>
+struct PendingTriangles {
+  float corners[9][Width] = {};
+  int count = 0;
+  // Adds one; true when all Width lanes are taken.
+  GWNRT_FORCEINLINE bool push(const vec3& p0, const vec3& p1, const vec3& p2) {
+    for (int k = 0; k < 3; ++k) {
+      corners[k][count] = p0[k];
+      corners[3 + k][count] = p1[k];
+      corners[6 + k][count] = p2[k];
+    }
+    return ++count == Width;
+  }
+  // The corners relative to x as lanes of V (float or double elements); lanes from count on hold
+  // stale corners.
+  template <class V, class Point>
+  GWNRT_FORCEINLINE void relative_to(const Point& x, V g[3][3]) const {
+    typedef float Loaded __attribute__((vector_size(sizeof(float) * Width)));
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) {
+        Loaded v;
+        __builtin_memcpy(&v, corners[3 * j + k], sizeof v);
+        g[j][k] = __builtin_convertvector(v, V) - x[k];
+      }
+  }
+};
+
+// A node's far lanes' expansion (one lane vector), and the prefetch of what it reads.
+template <int Order>
+GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node, f4 dx, f4 dy, f4 dz) {
+  f4 n[3], s[6], p[10], e[3];
+  const WideNodeExpansion& ex = tree.expansion[node];
+  for (int a = 0; a < 3; ++a) n[a] = load4(ex.n[a]);
+  if constexpr (Order >= 1)
+    for (int k = 0; k < 6; ++k) s[k] = load4(tree.order1[node].s[k]);
+  if constexpr (Order >= 2) {
+    for (int k = 0; k < 10; ++k) p[k] = load4(tree.order2[node].p[k]);
+    for (int a = 0; a < 3; ++a) e[a] = load4(tree.order2[node].e[a]);
+  }
+  return FarFieldTerms<Order, f4>(n, s, p, e, dx, dy, dz).omega;
+}
+template <int Order>
+GWNRT_FORCEINLINE void prefetch_lane_moments(const TriangleTreeView& tree, uint32_t node) {
+  const char* n = reinterpret_cast<const char*>(&tree.expansion[node]);
+  __builtin_prefetch(n + 64);
+  if constexpr (Order >= 1) {
+    const char* o1 = reinterpret_cast<const char*>(&tree.order1[node]);
+    __builtin_prefetch(o1);
+    __builtin_prefetch(o1 + 64);
+  }
+  if constexpr (Order >= 2) {
+    const char* o2 = reinterpret_cast<const char*>(&tree.order2[node]);
+    for (int i = 0; i < 4; ++i) __builtin_prefetch(o2 + 64 * i);
+  }
 }
 
 // w alone on the host: a node's far lanes expanded together (one f4 expansion per node), and the
@@ -216,64 +286,30 @@ struct TaylorLanesSum {
   const vec3 x;
   f4 far_omega{};
   fnear near_omega{};
-  float pending[9][kNearWidth] = {};  // corners p0, p1, p2 (x, y, z) of the pending near triangles
-  int pending_count = 0;
+  PendingTriangles<kNearWidth> pending{};
 
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
-    f4 n[3], s[6], p[10], e[3];
-    const WideNodeExpansion& ex = tree.expansion[node];
-    for (int a = 0; a < 3; ++a) n[a] = load4(ex.n[a]);
-    if constexpr (Order >= 1)
-      for (int k = 0; k < 6; ++k) s[k] = load4(tree.order1[node].s[k]);
-    if constexpr (Order >= 2) {
-      for (int k = 0; k < 10; ++k) p[k] = load4(tree.order2[node].p[k]);
-      for (int a = 0; a < 3; ++a) e[a] = load4(tree.order2[node].e[a]);
-    }
-    const FarFieldTerms<Order, f4> t(n, s, p, e, dx, dy, dz);
-    far_omega += lane_select(mask, t.omega, f4{});
+    far_omega += lane_select(mask, far_lanes_omega<Order>(tree, node, dx, dy, dz), f4{});
   }
-  GWNRT_FORCEINLINE void prefetch(uint32_t node) const {
-    const char* n = reinterpret_cast<const char*>(&tree.expansion[node]);
-    __builtin_prefetch(n + 64);
-    if constexpr (Order >= 1) {
-      const char* o1 = reinterpret_cast<const char*>(&tree.order1[node]);
-      __builtin_prefetch(o1);
-      __builtin_prefetch(o1 + 64);
-    }
-    if constexpr (Order >= 2) {
-      const char* o2 = reinterpret_cast<const char*>(&tree.order2[node]);
-      for (int i = 0; i < 4; ++i) __builtin_prefetch(o2 + 64 * i);
-    }
-  }
+  GWNRT_FORCEINLINE void prefetch(uint32_t node) const { prefetch_lane_moments<Order>(tree, node); }
   GWNRT_FORCEINLINE void near(uint32_t, const vec3& p0, const vec3& p1, const vec3& p2) {
-    const int i = pending_count;
-    for (int a = 0; a < 3; ++a) {
-      pending[a][i] = p0[a];
-      pending[3 + a][i] = p1[a];
-      pending[6 + a][i] = p2[a];
-    }
-    if (++pending_count == kNearWidth) flush();
+    if (pending.push(p0, p1, p2)) flush();
   }
   GWNRT_FORCEINLINE void flush() {
-    fnear a[3], b[3], c[3];
-    for (int k = 0; k < 3; ++k) {
-      fnear v[3];
-      for (int j = 0; j < 3; ++j) __builtin_memcpy(&v[j], pending[3 * j + k], sizeof(fnear));
-      a[k] = v[0] - x[k];
-      b[k] = v[1] - x[k];
-      c[k] = v[2] - x[k];
-    }
-    fnear omega = lane_solid_angle(a, b, c);
-    if (pending_count < kNearWidth) {  // the unused lanes hold stale corners
+    fnear g[3][3];
+    pending.relative_to(x, g);
+    const LaneTangent<fnear> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
+    fnear omega = 2.0f * lane_atan2(tangent.numerator, tangent.denominator);
+    if (pending.count < kNearWidth) {  // the unused lanes hold stale corners
       inear lane;
       for (int i = 0; i < kNearWidth; ++i) lane[i] = i;
-      omega = lane_select(lane < pending_count, omega, fnear{});
+      omega = lane_select(lane < pending.count, omega, fnear{});
     }
     near_omega += omega;
-    pending_count = 0;
+    pending.count = 0;
   }
   GWNRT_FORCEINLINE float omega() {
-    if (pending_count > 0) flush();
+    if (pending.count > 0) flush();
     return lane_sum(far_omega) + lane_sum(near_omega);
   }
 };

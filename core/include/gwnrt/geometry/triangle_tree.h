@@ -28,5 +28,11 @@ Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTre
 // triangle_ids are those input indices.
 Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size,
                            TriangleTree& out);
+// The tree over base's triangles whose input index t has keep[t] != 0, with base's topology:
+// every leaf keeps its selected triangles in leaf order, lanes with none left below are
+// emptied, and boxes and moments are those of what is kept. No splits, so far cheaper than a
+// build; where at least a quarter of the triangles are kept it is at most a level deeper than a
+// build over them would be (log4 of the ratio).
+Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out);
 
 }  // namespace gwnrt
