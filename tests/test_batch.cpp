@@ -462,6 +462,13 @@ TEST_P(BvhOnRealMeshes, FilteredTreeHoldsExactlyTheKeptTriangles) {
           std::max(max_error, std::abs(double(winding_number_taylor<2, false, false>(view, x, 2.0f).w) - exact));
     }
     EXPECT_LE(max_error, 2e-3) << "fraction " << fraction;
+    // Without moments (the sheet tree): the same triangles and nodes, no expansion arrays.
+    TriangleTree bare;
+    ASSERT_TRUE(filter_triangle_tree(model.triangle_tree(), keep, bare, TreeMoments::kWithout).ok());
+    EXPECT_EQ(bare.triangle_ids, tree.triangle_ids);
+    EXPECT_EQ(bare.vertices, tree.vertices);
+    EXPECT_EQ(bare.bvh.nodes.size(), tree.bvh.nodes.size());
+    EXPECT_TRUE(bare.expansion.empty() && bare.order1.empty() && bare.order2.empty());
   }
 }
 

@@ -227,7 +227,7 @@ Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTre
 }
 
 Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size,
-                           TriangleTree& out) {
+                           TriangleTree& out, TreeMoments moments) {
   const size_t n = selection.size();
   std::vector<Aabb> bounds(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
@@ -242,12 +242,13 @@ Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection
     const uvec3 tri = mesh.triangles[tree.triangle_ids[i]];
     for (int k = 0; k < 3; ++k) tree.vertices[3 * i + k] = mesh.positions[tri[k]];
   });
-  if (n > 0) MomentBuilder(tree).run();  // an empty tree has no root to hold moments
+  if (n > 0 && moments == TreeMoments::kWith) MomentBuilder(tree).run();  // an empty tree has no root for them
   out = std::move(tree);
   return Status::Ok();
 }
 
-Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out) {
+Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out,
+                            TreeMoments moments) {
   const size_t n = base.triangle_ids.size();
   for (const uint32_t id : base.triangle_ids)
     if (id >= keep.size())
@@ -313,7 +314,7 @@ Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> k
     }
     kept_below[k] = total;
   }
-  MomentBuilder(tree).run();
+  if (moments == TreeMoments::kWith) MomentBuilder(tree).run();
   out = std::move(tree);
   return Status::Ok();
 }

@@ -67,7 +67,7 @@ class GwnModel {
   // given for it (0 for the exact crossings).
   WindingMethod sheet_method() const { return sheet_method_; }
   float sheet_side_tolerance() const { return sheet_method_ == WindingMethod::kCrossing ? 0.0f : kSheetSideTolerance; }
-  const TriangleTree& sheet_tree() const { return sheets_; }
+  const TriangleTree& sheet_tree() const { return sheets_; }  // for distances: no moments
   float sheet_level() const { return sheet_level_; }
   // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
   // is too coarse to decide) and rebuilds the sheet tree. Not thread-safe with queries running

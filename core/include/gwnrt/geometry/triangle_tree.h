@@ -24,15 +24,20 @@ struct TriangleTree {
 };
 
 Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTree& out);
+// Whether a tree gets the moments of the multipole expansion, or only what distances need (the
+// BVH, the vertices and ids: the sheet tree, sdf/sheets.h; its expansion arrays stay empty).
+enum class TreeMoments { kWith, kWithout };
+
 // The tree over the triangles `selection` of the mesh (input indices, none of zero area); its
 // triangle_ids are those input indices.
 Status build_triangle_tree(const Mesh& mesh, std::span<const uint32_t> selection, uint32_t max_leaf_size,
-                           TriangleTree& out);
+                           TriangleTree& out, TreeMoments moments = TreeMoments::kWith);
 // The tree over base's triangles whose input index t has keep[t] != 0, with base's topology:
 // every leaf keeps its selected triangles in leaf order, lanes with none left below are
 // emptied, and boxes and moments are those of what is kept. No splits, so far cheaper than a
 // build; where at least a quarter of the triangles are kept it is at most a level deeper than a
 // build over them would be (log4 of the ratio).
-Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out);
+Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> keep, TriangleTree& out,
+                            TreeMoments moments = TreeMoments::kWith);
 
 }  // namespace gwnrt
