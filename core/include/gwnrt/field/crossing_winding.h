@@ -152,8 +152,9 @@ struct ConeCrossingSum {
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // w_C and C's jumps on the host: ConeCrossingSum<false, false>'s terms and decisions with a
 // node's far lanes expanded together and the near triangles four at a time in double, four angle
-// products side by side. On bunny_holes a crossing query sums 30 near cone triangles; scalar,
-// they were most of its time.
+// products side by side. On bunny_holes a crossing query sums 30 near cone triangles, which were
+// most of its time: measured on one core (300k points of the bench's mix in Morton order), 1.2 µs
+// a query scalar, 0.68-0.76 µs like this, the same w to the last bit of the sums compared.
 struct ConeCrossingLanes {
   const TriangleTreeView& cone;
   const RayFrame& frame;
