@@ -55,6 +55,14 @@ double time_batch(const GwnModel& model, const std::vector<vec3>& points, const 
   return sec;
 }
 
+// Where a Taylor query's time goes: the lanes the traversal expands and the triangles it sums
+// exactly (visit_multipole's test, the one every visitor runs).
+struct TaylorCounts {
+  uint64_t far_lanes = 0, near_triangles = 0;
+  void far(uint32_t, int, const vec3&) { ++far_lanes; }
+  void near(uint32_t, const vec3&, const vec3&, const vec3&) { ++near_triangles; }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -194,6 +202,10 @@ int main(int argc, char** argv) {
       "crossing w per query: %.3f crossings of M, %.3f of the cone, %.2f exact cone triangles, %.2f cone "
       "clusters expanded\n",
       stats.mesh_crossings * per, stats.cone_crossings * per, stats.cone_near * per, stats.cone_far * per);
+  TaylorCounts taylor_counts;
+  for (size_t i = 0; i < sampled; ++i) visit_multipole(view.triangles, points[i], beta, taylor_counts);
+  std::printf("Taylor w per query: %.2f lanes expanded, %.2f exact triangles\n", taylor_counts.far_lanes * per,
+              taylor_counts.near_triangles * per);
 
   if (!json_path.empty()) {
     nlohmann::json out;
@@ -215,6 +227,8 @@ int main(int argc, char** argv) {
                                  {"cone_crossings", stats.cone_crossings * per},
                                  {"cone_exact_triangles", stats.cone_near * per},
                                  {"cone_clusters_expanded", stats.cone_far * per}};
+    out["taylor_per_query"] = {{"lanes_expanded", taylor_counts.far_lanes * per},
+                               {"exact_triangles", taylor_counts.near_triangles * per}};
     nlohmann::json table = nlohmann::json::array();
     for (const Row& r : rows)
       table.push_back({{"mode", r.mode},
