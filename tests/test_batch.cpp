@@ -55,8 +55,7 @@ QueryRequest request_for(int order, bool exact) {
   return r;
 }
 
-std::vector<PointResult> run_batch(const GwnModel& model, const std::vector<vec3>& points,
-                                   const QueryRequest& request) {
+std::vector<PointResult> run_batch(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request) {
   std::vector<PointResult> results(points.size());
   const Status s = evaluate_points(model, points, request, results);
   EXPECT_TRUE(s.ok()) << s.message();
@@ -74,9 +73,12 @@ TEST_P(BatchOnRealMeshes, BitIdenticalToSinglePointsInInputOrder) {
       if (exact && order > 0) break;  // exact ignores the order
       SCOPED_TRACE(exact ? std::string("exact") : "order " + std::to_string(order));
       const QueryRequest request = request_for(order, exact);
-      const std::vector<PointResult> batch = run_batch(model, points, request);
-      for (size_t i = 0; i < points.size(); ++i)
-        ASSERT_TRUE(identical(batch[i], evaluate_point(view, points[i], request))) << "point " << i;
+      // The brute force on a tenth of the points: it sums every triangle for every field, and
+      // was most of this test's time (8x under ASan).
+      const std::span<const vec3> some(points.data(), exact ? points.size() / 10 : points.size());
+      const std::vector<PointResult> batch = run_batch(model, some, request);
+      for (size_t i = 0; i < some.size(); ++i)
+        ASSERT_TRUE(identical(batch[i], evaluate_point(view, some[i], request))) << "point " << i;
     }
   }
   // Shuffled input gives the same results, shuffled the same way.
