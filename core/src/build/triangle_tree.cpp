@@ -289,12 +289,19 @@ Status filter_triangle_tree(const TriangleTree& base, std::span<const uint8_t> k
       if (node.child[l] == kEmptyLane) continue;
       Aabb box;
       if (node.count[l] > 0) {
+        if (size_t(node.child[l]) + node.count[l] > n)
+          return {StatusCode::kInvalidArgument, "filter_triangle_tree: node " + std::to_string(k) +
+                                                    " holds triangles beyond the tree's " + std::to_string(n)};
         const uint32_t first = kept_before[node.child[l]], count = kept_before[node.child[l] + node.count[l]] - first;
         for (uint32_t t = first; t < first + count; ++t)
           for (int c = 0; c < 3; ++c) box.extend(tree.vertices[3 * size_t(t) + c]);
         node.child[l] = count > 0 ? first : kEmptyLane;
         node.count[l] = count;
         total += count;
+      } else if (node.child[l] <= k || node.child[l] >= tree.bvh.nodes.size()) {
+        return {StatusCode::kInvalidArgument, "filter_triangle_tree: node " + std::to_string(k) + " has child " +
+                                                  std::to_string(node.child[l]) +
+                                                  ", not after it (the tree was not made by build_wide_bvh)"};
       } else if (kept_below[node.child[l]] > 0) {
         const WideNode& child = tree.bvh.nodes[node.child[l]];
         for (int m = 0; m < kBvhWidth; ++m)
