@@ -178,7 +178,6 @@ struct ConeCrossingLanes {
     for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
       add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
   }
-  GWNRT_FORCEINLINE void prefetch(uint32_t node) const { prefetch_lane_moments<2>(cone, node); }
   GWNRT_FORCEINLINE void near_leaf(uint32_t first, uint32_t count) {
     const vec3* v = cone.vertices + 3 * first;
     const uint32_t last = count - 1;

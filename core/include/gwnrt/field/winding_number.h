@@ -65,7 +65,6 @@ GWNRT_HD GWNRT_FORCEINLINE auto lane_is_far(T dx, T dy, T dz, T radius, M is_inn
 template <class Visitor>
 concept FarLanesVisitor = requires(Visitor& v, uint32_t node, i4 mask, f4 d) {
   v.far_lanes(node, mask, d, d, d);
-  v.prefetch(node);  // a node about to be visited: what far_lanes would read
 };
 
 // One that also takes a near leaf's triangles [first, first + count) at once.
@@ -83,6 +82,10 @@ namespace detail {
 // (the same points sorted in space run 2.5x faster), so each opened child is prefetched when
 // pushed, and its parent summed after the pushes to give the prefetches time: 4.7 -> 3.9 µs.
 // (A two-node delay between stack and visit, for more prefetch distance, measured no better.)
+// Only the child's node and the first line of its expansion: prefetching its moments too (7
+// more lines) cost more than it saved once batches ran in Morton order (one core, 1M points in
+// that order: the dragon 1.90 -> 1.77 µs without it, bunny_holes 1.48 -> 1.32-1.39 µs; shuffled
+// points on the dragon the same, 4.7-5.1 µs either way).
 template <class Visitor>
 GWNRT_FORCEINLINE void visit_multipole_lanes(const TriangleTreeView& tree, const vec3& x, float inner_scale2,
                                              float leaf_scale2, Visitor& visitor) {
@@ -105,7 +108,6 @@ GWNRT_FORCEINLINE void visit_multipole_lanes(const TriangleTreeView& tree, const
       stack[sp++] = child;
       __builtin_prefetch(&tree.bvh.nodes[child].child);
       __builtin_prefetch(&tree.expansion[child]);
-      visitor.prefetch(child);
     }
     // Whether or not a lane is far: most visited nodes have one (31 of 37 a query on
     // bunny_holes), and the empty mask costs less than a mispredicted branch.
@@ -248,7 +250,7 @@ struct PendingTriangles {
   }
 };
 
-// A node's far lanes' expansion (one lane vector), and the prefetch of what it reads.
+// A node's far lanes' expansion (one lane vector).
 template <int Order>
 GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node, f4 dx, f4 dy, f4 dz) {
   f4 n[3], s[6], p[10], e[3];
@@ -261,20 +263,6 @@ GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node
     for (int a = 0; a < 3; ++a) e[a] = load4(tree.order2[node].e[a]);
   }
   return FarFieldTerms<Order, f4>(n, s, p, e, dx, dy, dz).omega;
-}
-template <int Order>
-GWNRT_FORCEINLINE void prefetch_lane_moments(const TriangleTreeView& tree, uint32_t node) {
-  const char* n = reinterpret_cast<const char*>(&tree.expansion[node]);
-  __builtin_prefetch(n + 64);
-  if constexpr (Order >= 1) {
-    const char* o1 = reinterpret_cast<const char*>(&tree.order1[node]);
-    __builtin_prefetch(o1);
-    __builtin_prefetch(o1 + 64);
-  }
-  if constexpr (Order >= 2) {
-    const char* o2 = reinterpret_cast<const char*>(&tree.order2[node]);
-    for (int i = 0; i < 4; ++i) __builtin_prefetch(o2 + 64 * i);
-  }
 }
 
 // w alone on the host: a node's far lanes expanded together (one f4 expansion per node), and the
@@ -291,7 +279,6 @@ struct TaylorLanesSum {
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
     far_omega += lane_select(mask, far_lanes_omega<Order>(tree, node, dx, dy, dz), f4{});
   }
-  GWNRT_FORCEINLINE void prefetch(uint32_t node) const { prefetch_lane_moments<Order>(tree, node); }
   GWNRT_FORCEINLINE void near(uint32_t, const vec3& p0, const vec3& p1, const vec3& p2) {
     if (pending.push(p0, p1, p2)) flush();
   }
