@@ -149,6 +149,13 @@ struct ConeCrossingSum {
   }
 };
 
+// The visitor winding_number_crossing runs: ConeCrossingSum, or on the host for w alone
+// ConeCrossingLanes.
+template <bool WantGradient, bool WantHessian>
+struct ConeCrossingVisitor {
+  using type = ConeCrossingSum<WantGradient, WantHessian>;
+};
+
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // w_C and C's jumps on the host: ConeCrossingSum<false, false>'s terms and decisions with a
 // node's far lanes expanded together and the near triangles four at a time in double, four angle
@@ -182,12 +189,9 @@ struct ConeCrossingLanes {
     const vec3* v = cone.vertices + 3 * first;
     const uint32_t last = count - 1;
     const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
-    d4 g[3][3];
+    d4 g[3][3];  // lanes past the leaf repeat its last triangle
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 3; ++k) g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - x[k];
-    flush(v, count, g);
-  }
-  GWNRT_FORCEINLINE void flush(const vec3* v, uint32_t count, const d4 (&g)[3][3]) {
     const LaneTangent<d4> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     const l4 lane{0, 1, 2, 3};
     const l4 used = lane < int64_t(count);
@@ -222,19 +226,9 @@ struct ConeCrossingLanes {
   }
 };
 
-// The visitor winding_number_crossing runs.
-template <bool WantGradient, bool WantHessian>
-struct ConeCrossingVisitor {
-  using type = ConeCrossingSum<WantGradient, WantHessian>;
-};
 template <>
 struct ConeCrossingVisitor<false, false> {
   using type = ConeCrossingLanes;
-};
-#else
-template <bool WantGradient, bool WantHessian>
-struct ConeCrossingVisitor {
-  using type = ConeCrossingSum<WantGradient, WantHessian>;
 };
 #endif
 

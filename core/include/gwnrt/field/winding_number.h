@@ -236,10 +236,9 @@ struct PendingTriangles {
     }
     return ++count == Width;
   }
-  // The corners relative to x as lanes of V (float or double elements); lanes from count on hold
-  // stale corners.
-  template <class V, class Point>
-  GWNRT_FORCEINLINE void relative_to(const Point& x, V g[3][3]) const {
+  // The corners relative to x as lanes of V; lanes from count on hold stale corners.
+  template <class V>
+  GWNRT_FORCEINLINE void relative_to(const vec3& x, V g[3][3]) const {
     typedef float Loaded __attribute__((vector_size(sizeof(float) * Width)));
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 3; ++k) {
