@@ -143,6 +143,63 @@ INSTANTIATE_TEST_SUITE_P(Meshes, TaylorOnRealMeshes,
                                            TaylorCase{"bunny_holes.obj", 2.0f},
                                            TaylorCase{"dragon_vrip_res4.ply", 2.0f}));
 
+#if GWNRT_HOST_LANES && defined(__AVX2__)
+// Records what a lane traversal hands its visitor: each far cluster as (node, lane) and each
+// near triangle. With far_lane_pair when Pairs, so that visit_multipole_lanes visits node pairs.
+template <bool Pairs>
+struct VisitRecord {
+  std::vector<std::pair<uint32_t, int>> far;
+  std::vector<uint32_t> near_triangles;
+  void far_lanes(uint32_t node, i4 mask, f4, f4, f4) {
+    for (int l = 0; l < 4; ++l)
+      if (mask[l]) far.emplace_back(node, l);
+  }
+  void far_lane_pair(uint32_t a, uint32_t b, i8 mask, f8, f8, f8) requires Pairs {
+    for (int l = 0; l < 8; ++l)
+      if (mask[l]) far.emplace_back(l < 4 ? a : b, l & 3);
+  }
+  void near(uint32_t t, const vec3&, const vec3&, const vec3&) { near_triangles.push_back(t); }
+  void sort() {
+    std::sort(far.begin(), far.end());
+    std::sort(near_triangles.begin(), near_triangles.end());
+  }
+};
+
+template <int PairsBelow>
+VisitRecord<true> visit_in_pairs(const TriangleTreeView& tree, const vec3& x, float scale2) {
+  VisitRecord<true> r;
+  detail::visit_multipole_lanes<PairsBelow>(tree, x, scale2, scale2 * kLeafExpansionScale * kLeafExpansionScale, r);
+  r.sort();
+  return r;
+}
+
+// The node-pair traversal (Taylor w on AVX2) hands over exactly the clusters and triangles that
+// one node at a time does, also once its stack passes the point where it falls back to single
+// nodes (forced here by a threshold of 2); with nothing far, every triangle exactly once.
+TEST(WindingNumber, NodePairTraversalVisitsWhatSingleNodesDo) {
+  const GwnModel model = build_model(load_test_mesh("dragon_vrip_res4.ply"));
+  const TriangleTreeView tree = model.triangle_view();
+  for (const vec3& x : test::sample_points(test::mesh_bounds(model.mesh()), 300, 5)) {
+    for (const float beta : {0.5f, 2.0f, kInfinity}) {
+      const float scale2 = beta * beta;
+      VisitRecord<false> single;
+      detail::visit_multipole_lanes(tree, x, scale2, scale2 * kLeafExpansionScale * kLeafExpansionScale, single);
+      single.sort();
+      for (const VisitRecord<true>& pairs :
+           {visit_in_pairs<kTraversalStackSize>(tree, x, scale2), visit_in_pairs<2>(tree, x, scale2)}) {
+        ASSERT_EQ(pairs.far, single.far) << "beta " << beta;
+        ASSERT_EQ(pairs.near_triangles, single.near_triangles) << "beta " << beta;
+      }
+      if (beta == kInfinity) {
+        ASSERT_TRUE(single.far.empty());
+        ASSERT_EQ(single.near_triangles.size(), model.mesh().triangles.size());
+        for (size_t i = 0; i < single.near_triangles.size(); ++i) ASSERT_EQ(single.near_triangles[i], i);
+      }
+    }
+  }
+}
+#endif
+
 // Points at least `clearance` from every triangle, so that w is smooth around them.
 std::vector<vec3> points_away_from_mesh(const GwnModel& model, size_t count, float clearance, uint32_t seed) {
   const Aabb box = test::mesh_bounds(model.mesh());

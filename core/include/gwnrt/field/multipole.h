@@ -34,36 +34,66 @@ struct FieldAccumulator {
   Sym3<T> hessian;
 };
 
-// The quantities of one cluster's expansion at d = p̄ - x that Ω, ∇Ω and H Ω share, and Ω
-// itself. T is float (one lane) or a lane vector (lanes.h: a node's four lanes at once); the
-// moments are indexed as in Moments.
+// dᵀS d for S stored as (xx, xy, xz, yy, yz, zz), and P(d,d,d) for P stored as in Moments, as
+// polynomials grouped by the square of a coordinate: fewer operations and a shorter dependency
+// chain than contracting through S d and P(d,·,·) d, which only the derivatives need.
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T quadratic_form(const T* s, T dx, T dy, T dz) {
+  const T y2 = dy + dy, z2 = dz + dz;
+  return dx * (s[0] * dx + s[1] * y2 + s[2] * z2) + dy * (s[3] * dy + s[4] * z2) + s[5] * (dz * dz);
+}
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T cubic_form(const T* p, T dx, T dy, T dz) {
+  const T x3 = 3.0f * dx, y3 = 3.0f * dy, z3 = 3.0f * dz;
+  return dx * dx * (p[0] * dx + p[1] * y3 + p[2] * z3) + dy * dy * (p[3] * x3 + p[6] * dy + p[7] * z3) +
+         dz * dz * (p[5] * x3 + p[8] * y3 + p[9] * dz) + p[4] * (6.0f * dx * dy * dz);
+}
+
+// One cluster's Ω at d = p̄ - x and the scalars it is made of, which ∇Ω and H Ω share. T is
+// float (one lane) or a lane vector (lanes.h: a node's lanes at once); the moments are indexed
+// as in Moments.
 template <int Order, class T>
-struct FarFieldTerms {
-  T inv_r2, inv_r3, inv_r5, inv_r7, inv_r9;
-  T n_dot_d;
-  T sd[3] = {}, half_trace_s{}, dsd{};       // order 1: S d, ½ tr S, dᵀS d
-  T q[6] = {}, qd[3] = {}, c3{}, e_dot_d{};  // order 2: Q = P(d,·,·), Q d, P(d,d,d), e·d
+struct FarFieldOmega {
+  T inv_r2, inv_r3, inv_r5, inv_r7;  // all of them: the derivatives need higher powers than Ω
+  T n_dot_d, half_trace_s{}, dsd{};  // order 1: ½ tr S, dᵀS d
+  T c3{}, e_dot_d{};                 // order 2: P(d,d,d), e·d
   T omega;
 
-  GWNRT_HD GWNRT_FORCEINLINE FarFieldTerms(const T* n, const T* s, const T* p, const T* e, T dx, T dy, T dz) {
-    const T r2 = dx * dx + dy * dy + dz * dz;
-    inv_r2 = 1.0f / r2;
-    const T inv_r = lane_sqrt(inv_r2);
-    inv_r3 = inv_r * inv_r2;
+  GWNRT_HD GWNRT_FORCEINLINE FarFieldOmega(const T* n, const T* s, const T* p, const T* e, T dx, T dy, T dz) {
+    inv_r2 = 1.0f / (dx * dx + dy * dy + dz * dz);
+    inv_r3 = lane_sqrt(inv_r2) * inv_r2;
     inv_r5 = inv_r3 * inv_r2;
     inv_r7 = inv_r5 * inv_r2;
-    inv_r9 = inv_r7 * inv_r2;
     n_dot_d = n[0] * dx + n[1] * dy + n[2] * dz;
     omega = n_dot_d * inv_r3;
+    if constexpr (Order >= 1) {
+      half_trace_s = 0.5f * (s[0] + s[3] + s[5]);
+      dsd = quadratic_form(s, dx, dy, dz);
+      omega += half_trace_s * inv_r3 - 1.5f * dsd * inv_r5;
+    }
+    if constexpr (Order >= 2) {
+      c3 = cubic_form(p, dx, dy, dz);
+      e_dot_d = e[0] * dx + e[1] * dy + e[2] * dz;
+      omega += 7.5f * c3 * inv_r7 - 1.5f * e_dot_d * inv_r5;
+    }
+  }
+};
+
+// And the vectors the derivatives add: S d and, for order 2, Q = P(d,·,·) and Q d.
+template <int Order, class T>
+struct FarFieldTerms : FarFieldOmega<Order, T> {
+  T inv_r9;
+  T sd[3] = {};
+  T q[6] = {}, qd[3] = {};
+
+  GWNRT_HD GWNRT_FORCEINLINE FarFieldTerms(const T* n, const T* s, const T* p, const T* e, T dx, T dy, T dz)
+      : FarFieldOmega<Order, T>(n, s, p, e, dx, dy, dz) {
+    inv_r9 = this->inv_r7 * this->inv_r2;
     if constexpr (Order >= 1) {
       sd[0] = s[0] * dx + s[1] * dy + s[2] * dz;
       sd[1] = s[1] * dx + s[3] * dy + s[4] * dz;
       sd[2] = s[2] * dx + s[4] * dy + s[5] * dz;
-      half_trace_s = 0.5f * (s[0] + s[3] + s[5]);
-      dsd = dx * sd[0] + dy * sd[1] + dz * sd[2];
-      omega += half_trace_s * inv_r3 - 1.5f * dsd * inv_r5;
     }
-    // P(d,d,·) = Q d and P(d,d,d) = d·Q d.
     if constexpr (Order >= 2) {
       q[0] = p[0] * dx + p[1] * dy + p[2] * dz;  // xx
       q[1] = p[1] * dx + p[3] * dy + p[4] * dz;  // xy
@@ -74,9 +104,6 @@ struct FarFieldTerms {
       qd[0] = q[0] * dx + q[1] * dy + q[2] * dz;
       qd[1] = q[1] * dx + q[3] * dy + q[4] * dz;
       qd[2] = q[2] * dx + q[4] * dy + q[5] * dz;
-      c3 = dx * qd[0] + dy * qd[1] + dz * qd[2];
-      e_dot_d = e[0] * dx + e[1] * dy + e[2] * dz;
-      omega += 7.5f * c3 * inv_r7 - 1.5f * e_dot_d * inv_r5;
     }
   }
 };
