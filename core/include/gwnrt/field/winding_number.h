@@ -338,43 +338,25 @@ struct PendingTriangles {
   }
 };
 
-// A node's lanes' moments, one lane vector each.
-template <int Order>
-GWNRT_FORCEINLINE void load_node_moments(const TriangleTreeView& tree, uint32_t node, f4 n[3], f4 s[6], f4 p[10],
-                                         f4 e[3]) {
-  const WideNodeExpansion& ex = tree.expansion[node];
-  for (int a = 0; a < 3; ++a) n[a] = load4(ex.n[a]);
+// The far lanes' expansion of one node (f4) or of two (f8, lanes 0-3 the first node's):
+// lanes(field) loads field(node) of each node as one lane vector.
+template <int Order, class V, class Lanes>
+GWNRT_FORCEINLINE V expand_far_lanes(const TriangleTreeView& tree, Lanes lanes, V dx, V dy, V dz) {
+  V n[3], s[6], p[10], e[3];
+  for (int k = 0; k < 3; ++k) n[k] = lanes([&](uint32_t i) { return tree.expansion[i].n[k]; });
   if constexpr (Order >= 1)
-    for (int k = 0; k < 6; ++k) s[k] = load4(tree.order1[node].s[k]);
+    for (int k = 0; k < 6; ++k) s[k] = lanes([&](uint32_t i) { return tree.order1[i].s[k]; });
   if constexpr (Order >= 2) {
-    for (int k = 0; k < 10; ++k) p[k] = load4(tree.order2[node].p[k]);
-    for (int a = 0; a < 3; ++a) e[a] = load4(tree.order2[node].e[a]);
+    for (int k = 0; k < 10; ++k) p[k] = lanes([&](uint32_t i) { return tree.order2[i].p[k]; });
+    for (int k = 0; k < 3; ++k) e[k] = lanes([&](uint32_t i) { return tree.order2[i].e[k]; });
   }
+  return FarFieldOmega<Order, V>(n, s, p, e, dx, dy, dz).omega;
 }
-
-// A node's far lanes' expansion (one lane vector).
 template <int Order>
 GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node, f4 dx, f4 dy, f4 dz) {
-  f4 n[3], s[6], p[10], e[3];
-  load_node_moments<Order>(tree, node, n, s, p, e);
-  return FarFieldOmega<Order, f4>(n, s, p, e, dx, dy, dz).omega;
+  return expand_far_lanes<Order>(
+      tree, [&](auto field) { return load4(field(node)); }, dx, dy, dz);
 }
-
-#if defined(__AVX2__)
-// Two nodes' far lanes in one 8-wide expansion: lanes 0-3 node a's, 4-7 node b's.
-template <int Order>
-GWNRT_FORCEINLINE f8 far_lanes_omega(const TriangleTreeView& tree, uint32_t a, uint32_t b, f8 dx, f8 dy, f8 dz) {
-  f8 n[3], s[6], p[10], e[3];
-  for (int k = 0; k < 3; ++k) n[k] = load8(tree.expansion[a].n[k], tree.expansion[b].n[k]);
-  if constexpr (Order >= 1)
-    for (int k = 0; k < 6; ++k) s[k] = load8(tree.order1[a].s[k], tree.order1[b].s[k]);
-  if constexpr (Order >= 2) {
-    for (int k = 0; k < 10; ++k) p[k] = load8(tree.order2[a].p[k], tree.order2[b].p[k]);
-    for (int k = 0; k < 3; ++k) e[k] = load8(tree.order2[a].e[k], tree.order2[b].e[k]);
-  }
-  return FarFieldOmega<Order, f8>(n, s, p, e, dx, dy, dz).omega;
-}
-#endif
 
 // w alone on the host: a node's far lanes expanded together (one f4 expansion per node), and the
 // near triangles kNearWidth at a time with a vector atan2 (lanes.h): the scalar atan2f alone
@@ -390,7 +372,8 @@ struct TaylorLanesSum {
 #if defined(__AVX2__)
   f8 far_omega8{};  // lanes of node pairs (LaneTraversal::step_pair)
   GWNRT_FORCEINLINE void far_lane_pair(uint32_t a, uint32_t b, i8 mask, f8 dx, f8 dy, f8 dz) {
-    far_omega8 += lane_select(mask, far_lanes_omega<Order>(tree, a, b, dx, dy, dz), f8{});
+    const auto lanes = [&](auto field) { return load8(field(a), field(b)); };
+    far_omega8 += lane_select(mask, expand_far_lanes<Order>(tree, lanes, dx, dy, dz), f8{});
   }
 #endif
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
