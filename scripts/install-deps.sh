@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
           libtbb-dev libglm-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
-          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format)
+          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev libopenvdb-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -36,11 +36,10 @@ class ProgressBar {
  public:
   // `counter` must outlive the bar. `unit` labels the counts ("pts").
   ProgressBar(const std::atomic<size_t>& counter, size_t total, std::string unit = "pts")
-      : counter_(counter), total_(total), unit_(std::move(unit)), enabled_(::isatty(2) == 1) {
-    if (!enabled_) return;
-    start_ = std::chrono::steady_clock::now();
-    thread_ = std::thread([this] { run(); });
-  }
+      : ProgressBar(counter, total, nullptr, std::move(unit)) {}
+  // A total that grows as the work is sized (the mesher learns its passes' sizes one by one).
+  ProgressBar(const std::atomic<size_t>& counter, const std::atomic<size_t>& total, std::string unit)
+      : ProgressBar(counter, 0, &total, std::move(unit)) {}
 
   ~ProgressBar() { finish(); }
   ProgressBar(const ProgressBar&) = delete;
@@ -68,6 +67,18 @@ class ProgressBar {
  private:
   static constexpr int kBarWidth = 30;
 
+  ProgressBar(const std::atomic<size_t>& counter, size_t total, const std::atomic<size_t>* total_counter,
+              std::string unit)
+      : counter_(counter),
+        total_(total),
+        total_counter_(total_counter),
+        unit_(std::move(unit)),
+        enabled_(::isatty(2) == 1) {
+    if (!enabled_) return;
+    start_ = std::chrono::steady_clock::now();
+    thread_ = std::thread([this] { run(); });
+  }
+
   void run() {
     std::unique_lock<std::mutex> lock(mutex_);
     // Waiting before the first draw keeps runs that finish quickly free of any bar at all.
@@ -87,8 +98,9 @@ class ProgressBar {
   }
 
   void draw() {
-    const size_t done = std::min(counter_.load(std::memory_order_relaxed), total_);
-    const double fraction = total_ ? double(done) / double(total_) : 1.0;
+    const size_t total = total_counter_ ? total_counter_->load(std::memory_order_relaxed) : total_;
+    const size_t done = std::min(counter_.load(std::memory_order_relaxed), total);
+    const double fraction = total ? double(done) / double(total) : 1.0;
     const int filled = int(fraction * kBarWidth);
     std::string line = "\r[";
     line.append(size_t(filled), '#');
@@ -96,11 +108,11 @@ class ProgressBar {
     char pct[16];
     std::snprintf(pct, sizeof pct, "] %3d%%  ", int(fraction * 100.0));
     line += pct;
-    line += human_count(double(done)) + "/" + human_count(double(total_)) + " " + unit_;
+    line += human_count(double(done)) + "/" + human_count(double(total)) + " " + unit_;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     // Too few points done (or too little time passed) gives a wildly wrong rate; show nothing yet.
-    if (done > 0 && done < total_ && elapsed > 0.3) {
-      line += "  ETA " + duration(elapsed * double(total_ - done) / double(done));
+    if (done > 0 && done < total && elapsed > 0.3) {
+      line += "  ETA " + duration(elapsed * double(total - done) / double(done));
     }
     const size_t width = line.size() - 1;  // the leading '\r' takes no column
     if (width < last_width_) line.append(last_width_ - width, ' ');
@@ -111,6 +123,7 @@ class ProgressBar {
 
   const std::atomic<size_t>& counter_;
   size_t total_;
+  const std::atomic<size_t>* total_counter_;
   std::string unit_;
   bool enabled_;
   std::chrono::steady_clock::time_point start_;

@@ -235,6 +235,12 @@ struct ConeCrossingVisitor<false, false> {
 };
 #endif
 
+// w from the cone's traversal along a ray and the jumps of M met ahead on that ray.
+template <class Cone>
+GWNRT_HD GWNRT_FORCEINLINE float crossing_winding(const Cone& cone, int mesh_jumps) {
+  return float(cone.jumps - mesh_jumps) + cone.winding();
+}
+
 }  // namespace detail
 
 // w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
@@ -276,7 +282,7 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
       if (stats) ++stats->mesh_crossings;
     });
     WindingSample out;
-    out.w = float(cone.jumps - mesh_jumps) + cone.winding();
+    out.w = detail::crossing_winding(cone, mesh_jumps);
     if constexpr (WantGradient)
       out.gradient = cone.far_field.gradient * kInv4Pi + vec3(cone.near_gradient * (0.25 * kInvPi));
     if constexpr (WantHessian) {
@@ -296,6 +302,35 @@ GWNRT_HD inline WindingSample winding_number_crossing(const ModelView& m, const 
                          : winding_number_crossing<false, true>(m, x, kConeDerivativeBeta, stats);
   return want_gradient ? winding_number_crossing<true, false>(m, x, kConeDerivativeBeta, stats)
                        : winding_number_crossing<false, false>(m, x, kConeBeta, stats);
+}
+
+// w at Count points along one line parallel to axis `axis`, in ascending order along it (grid
+// corners: meshing/), each exactly as winding_number_crossing gives it but with M's crossings
+// found once: the ray from the first point along +axis meets, at t >= the offset of point k,
+// every crossing ahead of point k. The cone is traversed per point (its field differs), along
+// the same direction. A point exactly on C takes winding_number_crossing's nudged evaluation.
+template <int Count>
+GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis,
+                                         float (&out)[Count]) {
+  vec3 direction(0.0f);
+  direction[axis] = 1.0f;
+  const RayFrame line = make_ray_frame(points[0], direction);
+  float offset[Count];
+  int mesh_jumps[Count];
+  for (int k = 0; k < Count; ++k) {
+    offset[k] = points[k][axis] - points[0][axis];
+    mesh_jumps[k] = 0;
+  }
+  visit_axis_crossings(m.triangles.bvh, m.triangles.vertices, line, 0.0f, [&](uint32_t, float t, int jump) {
+    for (int k = 0; k < Count; ++k) mesh_jumps[k] += t >= offset[k] ? jump : 0;
+  });
+  for (int k = 0; k < Count; ++k) {
+    const RayFrame frame = make_ray_frame(points[k], direction);
+    typename detail::ConeCrossingVisitor<false, false>::type cone(m.cone, frame, points[k], kConeBeta, nullptr);
+    cone.traverse();
+    out[k] = cone.on_cone ? winding_number_crossing<false, false>(m, points[k]).w
+                          : detail::crossing_winding(cone, mesh_jumps[k]);
+  }
 }
 
 }  // namespace gwnrt

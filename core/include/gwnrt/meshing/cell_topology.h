@@ -1,0 +1,146 @@
+// Where a cell's sign pattern is split into surface components: the numbering of a cube's
+// corners, edges and faces, and the connected components of the surface patch inside one cell
+// (one dual-contouring vertex each, as in Nielson's dual marching cubes and manifold DC).
+// Host-and-device: computed from the 8 corner signs each time (about a hundred operations), no
+// table to copy to the device.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+// Corner c of a cell sits at offset (c & 1, (c >> 1) & 1, (c >> 2) & 1) cells from its lowest
+// corner. Edge e runs along axis a = e / 4 from the corner with bit a clear; its other two
+// coordinates are the bits of e % 4: the axis (a + 1) % 3 in bit 0, (a + 2) % 3 in bit 1.
+inline constexpr int kCellCorners = 8;
+inline constexpr int kCellEdges = 12;
+
+GWNRT_HD constexpr int edge_axis(int edge) { return edge >> 2; }
+
+// The corner at the edge's lower end.
+GWNRT_HD constexpr int edge_corner(int edge) {
+  const int a = edge >> 2, u = edge & 1, v = (edge >> 1) & 1;
+  return (u << ((a + 1) % 3)) | (v << ((a + 2) % 3));
+}
+
+// The edge along axis a from corner c (whose bit a is clear).
+GWNRT_HD constexpr int corner_edge(int corner, int axis) {
+  return 4 * axis + ((corner >> ((axis + 1) % 3)) & 1) + 2 * ((corner >> ((axis + 2) % 3)) & 1);
+}
+
+// The surface components of one cell: which sign-changing edges belong to which closed loop of
+// the patch. A corner is inside when w > w*; `inside` has bit c set for inside corner c.
+struct CellComponents {
+  int count = 0;                 // 0 to 4
+  int8_t of_edge[kCellEdges]{};  // component of each sign-changing edge, -1 for the others
+};
+
+// The cube's faces: face f = 2 · axis + side holds the corners whose bit `axis` equals `side`.
+// Its corners in cyclic order, and edge k of the face joining corner k to corner k + 1.
+struct CellFace {
+  int corner[4];
+  int edge[4];
+};
+GWNRT_HD constexpr CellFace cell_face(int face) {
+  const int axis = face >> 1, b = (axis + 1) % 3, c = (axis + 2) % 3, base = (face & 1) << axis;
+  CellFace f{};
+  f.corner[0] = base;
+  f.corner[1] = base | (1 << b);
+  f.corner[2] = base | (1 << b) | (1 << c);
+  f.corner[3] = base | (1 << c);
+  f.edge[0] = corner_edge(f.corner[0], b);
+  f.edge[1] = corner_edge(f.corner[1], c);
+  f.edge[2] = corner_edge(f.corner[3], b);
+  f.edge[3] = corner_edge(f.corner[0], c);
+  return f;
+}
+
+// On each face the patch crosses two or four of its edges. Two are joined by one segment. Four
+// (diagonal corners alike: the ambiguous face) are joined so that each inside corner is cut off
+// by its own segment, the two inside corners of the face apart: a rule that reads only the
+// face's four signs, so the two cells sharing the face join its crossings the same way and the
+// patches meet edge to edge (watertight). Every sign-changing edge lies on two faces, so the
+// segments close into loops; a loop is a component.
+GWNRT_HD constexpr CellComponents cell_components(uint32_t inside) {
+  CellComponents out;
+  int8_t parent[kCellEdges]{};
+  for (int e = 0; e < kCellEdges; ++e) {
+    const int c = edge_corner(e);
+    const bool changes = ((inside >> c) & 1u) != ((inside >> (c | (1 << edge_axis(e)))) & 1u);
+    parent[e] = int8_t(changes ? e : -1);
+  }
+  const auto find = [&](int e) {
+    while (parent[e] != e) e = parent[e];
+    return e;
+  };
+  const auto join = [&](int a, int b) {
+    const int ra = find(a), rb = find(b);
+    if (ra < rb) parent[rb] = int8_t(ra);
+    if (rb < ra) parent[ra] = int8_t(rb);
+  };
+  for (int face = 0; face < 6; ++face) {
+    const CellFace f = cell_face(face);
+    int crossed[4]{}, n = 0;
+    for (int k = 0; k < 4; ++k)
+      if (parent[f.edge[k]] >= 0) crossed[n++] = k;
+    if (n == 2) {
+      join(f.edge[crossed[0]], f.edge[crossed[1]]);
+    } else if (n == 4) {
+      // Corner k lies between edges k - 1 and k: cut off corners 0 and 2, or 1 and 3.
+      if ((inside >> f.corner[0]) & 1u) {
+        join(f.edge[3], f.edge[0]);
+        join(f.edge[1], f.edge[2]);
+      } else {
+        join(f.edge[0], f.edge[1]);
+        join(f.edge[2], f.edge[3]);
+      }
+    }
+  }
+  int8_t label[kCellEdges]{};
+  for (int e = 0; e < kCellEdges; ++e) {
+    label[e] = -1;
+    out.of_edge[e] = -1;
+  }
+  for (int e = 0; e < kCellEdges; ++e) {
+    if (parent[e] < 0) continue;
+    const int r = find(e);
+    if (label[r] < 0) label[r] = int8_t(out.count++);
+    out.of_edge[e] = label[r];
+  }
+  return out;
+}
+
+// A cell's components packed in 32 bits: the component of edge e in bits 2e, 2e + 1 (0 for the
+// edges without a crossing), the count in bits 24-26. What the passes keep per cell.
+GWNRT_HD constexpr uint32_t pack_components(const CellComponents& parts) {
+  uint32_t packed = uint32_t(parts.count) << 24;
+  for (int e = 0; e < kCellEdges; ++e)
+    if (parts.of_edge[e] > 0) packed |= uint32_t(parts.of_edge[e]) << (2 * e);
+  return packed;
+}
+GWNRT_HD constexpr int packed_count(uint32_t packed) { return int(packed >> 24); }
+GWNRT_HD constexpr int packed_component(uint32_t packed, int edge) { return int((packed >> (2 * edge)) & 3u); }
+
+#if !defined(__CUDACC__)
+// On the host the 256 patterns are tabulated at compile time: the cell passes read them for every
+// cell S crosses, several times, and the loop tracing was a third of the mesher's time (perf, the
+// bunny at 256³). The device computes them (a table there would have to be copied to constant memory).
+inline constexpr std::array<uint32_t, 256> kPackedCellComponents = [] {
+  std::array<uint32_t, 256> table{};
+  for (uint32_t mask = 0; mask < 256; ++mask) table[mask] = pack_components(cell_components(mask));
+  return table;
+}();
+#endif
+
+GWNRT_HD inline uint32_t packed_cell_components(uint32_t inside) {
+#if defined(__CUDACC__)
+  return pack_components(cell_components(inside));
+#else
+  return kPackedCellComponents[inside];
+#endif
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,474 @@
+// The passes of the mesher, each a per-item host-and-device function over trivially copyable
+// views (the driver, meshing/mesh_pipeline.h, runs them over a backend). The grid is sparse:
+// blocks of kBlockCells³ cells, kept only where a proven bound says S may meet them; a block's
+// slot holds its corners' values, its edges' offsets and its cells' vertex offsets.
+#pragma once
+
+#include <cstdint>
+
+#include "gwnrt/field/distance.h"
+#include "gwnrt/field/evaluate_winding.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/meshing/cell_topology.h"
+#include "gwnrt/meshing/edge_hermite.h"
+#include "gwnrt/meshing/qef.h"
+#include "gwnrt/sdf/signed_distance.h"
+
+namespace gwnrt {
+
+inline constexpr int kBlockCells = 8;  // cells (and owned corners) per block along each axis
+inline constexpr uint32_t kBlockItems = kBlockCells * kBlockCells * kBlockCells;
+// Scouting keeps a block when the bound on the distance from its centre to S is at most its
+// half-diagonal times this (float round-off of the bound's own terms is far below 1e-3).
+inline constexpr float kScoutSlack = 1.001f;
+
+GWNRT_HD inline void atomic_or(uint32_t* p, uint32_t bits) {
+#if defined(__CUDA_ARCH__)
+  atomicOr(p, bits);
+#else
+  __atomic_fetch_or(p, bits, __ATOMIC_RELAXED);
+#endif
+}
+
+GWNRT_HD inline int bit_count(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return __popc(v);
+#else
+  return __builtin_popcount(v);
+#endif
+}
+
+struct GridCoord {
+  int32_t x = 0, y = 0, z = 0;
+  GWNRT_HD int32_t operator[](int a) const { return a == 0 ? x : (a == 1 ? y : z); }
+  GWNRT_HD int32_t& operator[](int a) { return a == 0 ? x : (a == 1 ? y : z); }
+};
+
+// The grid: corner (i, j, k) at origin + cell · (i, j, k), cells [0, cells) per axis, corners
+// [0, cells]; blocks cover the corners.
+struct MeshGrid {
+  vec3 origin{0.0f};
+  float cell = 0;
+  int32_t cells[3] = {0, 0, 0};
+  int32_t blocks[3] = {0, 0, 0};
+
+  GWNRT_HD vec3 corner_position(const GridCoord& c) const {
+    return {origin.x + cell * float(c.x), origin.y + cell * float(c.y), origin.z + cell * float(c.z)};
+  }
+  GWNRT_HD uint64_t block_count() const { return uint64_t(blocks[0]) * uint64_t(blocks[1]) * uint64_t(blocks[2]); }
+  GWNRT_HD uint64_t block_index(int32_t bx, int32_t by, int32_t bz) const {
+    return uint64_t(bx) + uint64_t(blocks[0]) * (uint64_t(by) + uint64_t(blocks[1]) * uint64_t(bz));
+  }
+  GWNRT_HD GridCoord block_of_index(uint64_t i) const {
+    GridCoord b;
+    b.x = int32_t(i % uint64_t(blocks[0]));
+    i /= uint64_t(blocks[0]);
+    b.y = int32_t(i % uint64_t(blocks[1]));
+    b.z = int32_t(i / uint64_t(blocks[1]));
+    return b;
+  }
+};
+
+GWNRT_HD inline uint32_t local_index(const GridCoord& c) {
+  return uint32_t(c.x % kBlockCells) +
+         kBlockCells * (uint32_t(c.y % kBlockCells) + kBlockCells * uint32_t(c.z % kBlockCells));
+}
+GWNRT_HD inline GridCoord local_coord(uint32_t local) {
+  return {int32_t(local % kBlockCells), int32_t((local / kBlockCells) % kBlockCells),
+          int32_t(local / (kBlockCells * kBlockCells))};
+}
+
+// The sparse grid's arrays, per slot (a kept block or a neighbour whose corners it reads).
+struct SparseGridView {
+  MeshGrid grid;
+  const uint32_t* slot_of_block = nullptr;  // dense over the blocks; kEmptyLane: no slot
+  const uint32_t* block_of_slot = nullptr;  // block index
+  const uint32_t* needed_from = nullptr;    // per slot: bit d set when block − d (d ∈ {0,1}³) is active
+  const float* corner_value = nullptr;      // per slot × kBlockItems: w − w*; NaN: not evaluated
+  const uint8_t* edge_mask = nullptr;       // per corner: axes of its sign-changing edges
+  const uint32_t* edge_offset = nullptr;    // per corner: index of its first edge
+  const uint32_t* cell_parts = nullptr;     // per cell: pack_components of its pattern (0: no vertex)
+  const uint32_t* cell_vertex_count = nullptr;
+  const uint32_t* cell_vertex_offset = nullptr;
+
+  // The slot item (slot · kBlockItems + local) of a corner or cell, or kEmptyLane beyond the
+  // grid or in a block without a slot.
+  GWNRT_HD uint64_t item_of(const GridCoord& c, int32_t limit_extra) const {
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < 0 || c[a] >= grid.cells[a] + limit_extra) return ~uint64_t(0);
+    const uint32_t slot = slot_of_block[grid.block_index(c.x / kBlockCells, c.y / kBlockCells, c.z / kBlockCells)];
+    return slot == kEmptyLane ? ~uint64_t(0) : uint64_t(slot) * kBlockItems + local_index(c);
+  }
+  GWNRT_HD float corner_value_at(const GridCoord& c) const {
+    const uint64_t item = item_of(c, 1);
+    return item == ~uint64_t(0) ? __builtin_nanf("") : corner_value[item];
+  }
+  GWNRT_HD GridCoord coord_of_item(uint64_t item) const {
+    const GridCoord b = grid.block_of_index(block_of_slot[item / kBlockItems]);
+    const GridCoord l = local_coord(uint32_t(item % kBlockItems));
+    return {b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z};
+  }
+  GWNRT_HD bool slot_active(uint32_t slot) const { return needed_from[slot] & 1u; }
+
+  // The value at the corner one step along `axis` from corner `item` (at c): in the same slot
+  // unless c is on the block's last layer along that axis.
+  GWNRT_HD float next_corner_value(uint64_t item, const GridCoord& c, int axis) const {
+    const int32_t local = c[axis] % kBlockCells;
+    if (local + 1 < kBlockCells)
+      return corner_value[item + (axis == 0 ? 1 : (axis == 1 ? kBlockCells : kBlockCells * kBlockCells))];
+    GridCoord n = c;
+    ++n[axis];
+    return corner_value_at(n);
+  }
+
+  // A cell's 8 corner values (corner k at offset (k & 1, (k >> 1) & 1, k >> 2)): from its own
+  // slot for the 7³ of every 8³ cells that are not on the block's last layer (two thirds of the
+  // lookups), through the block map for the others.
+  GWNRT_HD void cell_corner_values(uint64_t item, const GridCoord& cell, float f[kCellCorners]) const {
+    const GridCoord l = local_coord(uint32_t(item % kBlockItems));
+    if (l.x + 1 < kBlockCells && l.y + 1 < kBlockCells && l.z + 1 < kBlockCells) {
+      for (int k = 0; k < kCellCorners; ++k)
+        f[k] = corner_value[item + (k & 1) + kBlockCells * ((k >> 1) & 1) + kBlockCells * kBlockCells * (k >> 2)];
+      return;
+    }
+    for (int k = 0; k < kCellCorners; ++k)
+      f[k] = corner_value_at({cell.x + (k & 1), cell.y + ((k >> 1) & 1), cell.z + ((k >> 2) & 1)});
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Scouting.
+
+// Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
+// above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
+// another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
+struct ScoutQuery {
+  ModelView model;
+  float level = 0.5f;
+  float beta = 2.0f;
+  bool use_sheets = false;
+
+  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi) const {
+    const vec3 centre = 0.5f * (lo + hi);
+    const float radius = kScoutSlack * 0.5f * glm::length(hi - lo);
+    const float surface = unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance;
+    if (surface <= radius) return true;
+    return level_set_distance_bound(model, centre, level, beta, radius) <= radius;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Corner values.
+
+// Whether corner `local` of a slot is read by some active block's cells: block b − d reads the
+// corners of b whose coordinate is 0 along each axis set in d.
+GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local) {
+  const uint32_t zero_axes = uint32_t(local.x == 0) | (uint32_t(local.y == 0) << 1) | (uint32_t(local.z == 0) << 2);
+  for (uint32_t d = 0; d < 8; ++d)
+    if (((needed_from >> d) & 1u) && (d & ~zero_axes) == 0) return true;
+  return false;
+}
+
+// One column of a slot's corners along z (item = slot · kBlockCells² + column): w − w* where
+// needed, NaN elsewhere. With the exact method and the whole column needed, M's crossings are
+// found once for its kBlockCells corners (winding_numbers_along_axis).
+struct CornerColumnPass {
+  SparseGridView view;
+  ModelView model;
+  WindingOptions winding;
+  float level;
+  float* corner_value;
+
+  GWNRT_HD void operator()(uint64_t item) const {
+    const uint32_t slot = uint32_t(item / (kBlockCells * kBlockCells));
+    const uint32_t column = uint32_t(item % (kBlockCells * kBlockCells));
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+    const uint32_t needed_from = view.needed_from[slot];
+    GridCoord g{b.x * kBlockCells + int32_t(column % kBlockCells), b.y * kBlockCells + int32_t(column / kBlockCells),
+                b.z * kBlockCells};
+    float* out = corner_value + uint64_t(slot) * kBlockItems + column;
+    bool needed[kBlockCells];
+    bool all = resolve_winding_method(model, winding.method) == WindingMethod::kCrossing;
+    for (int k = 0; k < kBlockCells; ++k) {
+      const GridCoord c{g.x, g.y, g.z + k};
+      needed[k] = c.x <= view.grid.cells[0] && c.y <= view.grid.cells[1] && c.z <= view.grid.cells[2] &&
+                  corner_needed(needed_from, local_coord(column + kBlockCells * kBlockCells * uint32_t(k)));
+      all = all && needed[k];
+    }
+    if (all) {
+      vec3 points[kBlockCells];
+      float w[kBlockCells];
+      for (int k = 0; k < kBlockCells; ++k) points[k] = view.grid.corner_position({g.x, g.y, g.z + k});
+      winding_numbers_along_axis(model, points, 2, w);
+      for (int k = 0; k < kBlockCells; ++k) out[kBlockCells * kBlockCells * k] = w[k] - level;
+      return;
+    }
+    for (int k = 0; k < kBlockCells; ++k)
+      out[kBlockCells * kBlockCells * k] =
+          needed[k] ? evaluate_winding(model, view.grid.corner_position({g.x, g.y, g.z + k}), winding).w - level
+                    : __builtin_nanf("");
+  }
+};
+
+GWNRT_HD inline bool is_inside(float f) { return f > 0.0f; }
+
+// ---------------------------------------------------------------------------------------------
+// Edges: each corner owns the three edges toward +x, +y, +z.
+
+struct EdgeCountPass {
+  SparseGridView view;
+  uint8_t* edge_mask;
+  uint32_t* edge_count;
+
+  GWNRT_HD void operator()(uint64_t item) const {
+    const float f = view.corner_value[item];
+    uint32_t mask = 0;
+    if (f == f) {
+      const GridCoord c = view.coord_of_item(item);
+      for (int a = 0; a < 3; ++a) {
+        const float g = view.next_corner_value(item, c, a);
+        if (g == g && is_inside(f) != is_inside(g)) mask |= 1u << a;
+      }
+    }
+    edge_mask[item] = uint8_t(mask);
+    edge_count[item] = uint32_t(bit_count(mask));
+  }
+};
+
+// The edges listed: edge i = (corner item) · 4 + axis.
+struct EdgeListPass {
+  SparseGridView view;
+  uint64_t* edges;
+  GWNRT_HD void operator()(uint64_t item) const {
+    uint32_t k = view.edge_offset[item];
+    for (uint32_t mask = view.edge_mask[item]; mask != 0; mask &= mask - 1)
+      edges[k++] = item * 4 + uint32_t(lowest_set_bit(mask));
+  }
+};
+
+struct HermitePass {
+  SparseGridView view;
+  ModelView model;
+  WindingOptions winding;
+  float level;
+  const uint64_t* edges;
+  HermitePoint* hermite;
+
+  GWNRT_HD void operator()(uint64_t i) const {
+    const uint64_t corner = edges[i] / 4;
+    const int axis = int(edges[i] % 4);
+    const GridCoord c = view.coord_of_item(corner);
+    GridCoord n = c;
+    ++n[axis];
+    hermite[i] = edge_hermite(model, winding, level, view.grid.corner_position(c), axis, view.grid.cell,
+                              view.corner_value[corner], view.corner_value_at(n));
+  }
+};
+
+// The index of the edge along `axis` from corner c (one with a sign change), or kEmptyLane.
+GWNRT_HD inline uint32_t edge_index(const SparseGridView& view, const GridCoord& c, int axis) {
+  const uint64_t item = view.item_of(c, 1);
+  if (item == ~uint64_t(0)) return kEmptyLane;
+  const uint32_t mask = view.edge_mask[item];
+  if (!((mask >> axis) & 1u)) return kEmptyLane;
+  return view.edge_offset[item] + uint32_t(bit_count(mask & ((1u << axis) - 1u)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cells.
+
+// The inside mask of a cell (bit k: corner k inside), or -1 when a corner was not evaluated.
+GWNRT_HD inline int cell_inside_mask(const SparseGridView& view, uint64_t item, const GridCoord& cell) {
+  float f[kCellCorners];
+  view.cell_corner_values(item, cell, f);
+  uint32_t mask = 0;
+  for (int k = 0; k < kCellCorners; ++k) {
+    if (f[k] != f[k]) return -1;
+    mask |= uint32_t(is_inside(f[k])) << k;
+  }
+  return int(mask);
+}
+
+// Vertices per cell of an active slot: one per surface component.
+struct CellCountPass {
+  SparseGridView view;
+  uint32_t* cell_parts;
+  uint32_t* cell_vertex_count;
+  GWNRT_HD void operator()(uint64_t item) const {
+    uint32_t parts = 0;
+    if (view.slot_active(uint32_t(item / kBlockItems))) {
+      const GridCoord cell = view.coord_of_item(item);
+      const bool in_grid = cell.x < view.grid.cells[0] && cell.y < view.grid.cells[1] && cell.z < view.grid.cells[2];
+      const int mask = in_grid ? cell_inside_mask(view, item, cell) : -1;
+      if (mask > 0 && mask < 255) parts = packed_cell_components(uint32_t(mask));
+    }
+    cell_parts[item] = parts;
+    cell_vertex_count[item] = uint32_t(packed_count(parts));
+  }
+};
+
+// Each component's vertex: the QEF of its edges' Hermite data in cell units (well conditioned
+// whatever the model's scale), solved and clamped to the cell; its normal the mean of theirs.
+struct CellVertexPass {
+  SparseGridView view;
+  const HermitePoint* hermite;
+  vec3* positions;
+  vec3* normals;
+  uint64_t* vertex_cell;  // the cell item of each vertex (for the smoothing)
+
+  GWNRT_HD void operator()(uint64_t item) const {
+    const uint32_t count = view.cell_vertex_count[item];
+    if (count == 0) return;
+    const GridCoord cell = view.coord_of_item(item);
+    const uint32_t parts = view.cell_parts[item];
+    const vec3 lo = view.grid.corner_position(cell);
+    const double inv_cell = 1.0 / double(view.grid.cell);
+    Qef qef[4];
+    for (int e = 0; e < kCellEdges; ++e) {
+      const int corner = edge_corner(e);
+      const uint32_t k = edge_index(
+          view, {cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)}, edge_axis(e));
+      if (k == kEmptyLane) continue;
+      const HermitePoint& h = hermite[k];
+      qef[packed_component(parts, e)].add((dvec3(h.point) - dvec3(lo)) * inv_cell, dvec3(h.normal));
+    }
+    const uint32_t first = view.cell_vertex_offset[item];
+    for (uint32_t p = 0; p < count; ++p) {
+      // Clamped to the cell itself. A sharp edge passing just outside a cell whose grid edges both
+      // its faces cross has its QEF minimum outside the cell (a turned cube: up to 0.26 cell out),
+      // and the clamped vertex lies off the edge; letting such vertices out by a third of a cell
+      // put them on the edge but made the output intersect itself (bunny_holes at 128³ and 256³:
+      // 10 and 16 triangle pairs; 0 clamped).
+      const dvec3 x = solve_qef(qef[p], dvec3(0.0), dvec3(1.0));
+      positions[first + p] = lo + vec3(x) * view.grid.cell;
+      const dvec3 n = qef[p].normal_sum;
+      const double length = glm::length(n);
+      normals[first + p] = length > 0 ? vec3(n / length) : vec3(0.0f, 0.0f, 1.0f);
+      vertex_cell[first + p] = item;
+    }
+  }
+};
+
+// The vertex of the component holding the edge along `axis` from corner c in `cell`, or
+// kEmptyLane when the cell has none (not active).
+GWNRT_HD inline uint32_t edge_vertex(const SparseGridView& view, const GridCoord& cell, const GridCoord& c, int axis) {
+  const uint64_t item = view.item_of(cell, 0);
+  if (item == ~uint64_t(0)) return kEmptyLane;
+  const uint32_t parts = view.cell_parts[item];
+  if (parts == 0) return kEmptyLane;
+  const int corner = (c.x - cell.x) | ((c.y - cell.y) << 1) | ((c.z - cell.z) << 2);
+  return view.cell_vertex_offset[item] + uint32_t(packed_component(parts, corner_edge(corner, axis)));
+}
+
+// One quad per sign-changing edge, from the four cells around it, ordered so that its normal
+// (right-handed) points out of {w > w*}, split into two triangles along the diagonal whose
+// triangles bend less against each other. An edge missing a cell gives two empty triangles
+// (kEmptyLane), removed afterwards.
+// How far from the edge's Hermite point the triangle (p, q, r) crosses the line of the edge
+// (through g along axis a), or +inf when it does not cross it.
+GWNRT_HD inline float crossing_offset(const vec3& p, const vec3& q, const vec3& r, const vec3& g, int a, float target) {
+  const int b = (a + 1) % 3, c = (a + 2) % 3;
+  const float d = (q[b] - p[b]) * (r[c] - p[c]) - (r[b] - p[b]) * (q[c] - p[c]);
+  if (d == 0.0f) return kInfinity;
+  const float u = ((g[b] - p[b]) * (r[c] - p[c]) - (r[b] - p[b]) * (g[c] - p[c])) / d;
+  const float v = ((q[b] - p[b]) * (g[c] - p[c]) - (g[b] - p[b]) * (q[c] - p[c])) / d;
+  if (!(u >= 0.0f && v >= 0.0f && u + v <= 1.0f)) return kInfinity;
+  return fabsf(p[a] + u * (q[a] - p[a]) + v * (r[a] - p[a]) - target);
+}
+
+struct QuadPass {
+  SparseGridView view;
+  const uint64_t* edges;
+  const HermitePoint* hermite;
+  const vec3* positions;
+  uvec3* triangles;
+
+  GWNRT_HD void operator()(uint64_t i) const {
+    const uint64_t corner = edges[i] / 4;
+    const int a = int(edges[i] % 4), b = (a + 1) % 3, c = (a + 2) % 3;
+    const GridCoord g = view.coord_of_item(corner);
+    // Around the edge counter-clockwise seen from +a: cells at (b, c) offsets (-1,-1), (0,-1),
+    // (0,0), (-1,0), since e_b × e_c = e_a.
+    const int db[4] = {-1, 0, 0, -1}, dc[4] = {-1, -1, 0, 0};
+    uint32_t v[4];
+    for (int k = 0; k < 4; ++k) {
+      GridCoord cell = g;
+      cell[b] += db[k];
+      cell[c] += dc[k];
+      v[k] = edge_vertex(view, cell, g, a);
+      if (v[k] == kEmptyLane) {
+        triangles[2 * i] = triangles[2 * i + 1] = uvec3(kEmptyLane);
+        return;
+      }
+    }
+    if (!is_inside(view.corner_value[corner])) {  // outside at the lower end: the normal is -a
+      const uint32_t s = v[1];
+      v[1] = v[3];
+      v[3] = s;
+    }
+    const vec3 p0 = positions[v[0]], p1 = positions[v[1]], p2 = positions[v[2]], p3 = positions[v[3]];
+    const auto unit = [](const vec3& n) {
+      const float l = glm::length(n);
+      return l > 0.0f ? n / l : vec3(0.0f);
+    };
+    // Diagonal 0-2: triangles (0,1,2), (0,2,3); diagonal 1-3: (0,1,3), (1,2,3). The quad is dual
+    // to the edge, and S crosses the edge at its Hermite point: the split that crosses the edge
+    // nearer that point is taken. Along a sharp feature this keeps the fold on the feature (two
+    // of the four vertices lie on it), where the flatter split would cut it off by up to half a
+    // cell (the cube's edges: 0.2-0.25 cell off with the flatter split, measured).
+    const vec3 origin = view.grid.corner_position(g);
+    const float target = hermite[i].point[a];
+    const float off02 =
+        fminf(crossing_offset(p0, p1, p2, origin, a, target), crossing_offset(p0, p2, p3, origin, a, target));
+    const float off13 =
+        fminf(crossing_offset(p0, p1, p3, origin, a, target), crossing_offset(p1, p2, p3, origin, a, target));
+    const float bend02 = glm::dot(unit(glm::cross(p1 - p0, p2 - p0)), unit(glm::cross(p2 - p0, p3 - p0)));
+    const float bend13 = glm::dot(unit(glm::cross(p1 - p0, p3 - p0)), unit(glm::cross(p2 - p1, p3 - p1)));
+    // A split whose triangles face against the edge's outward direction, or against each other,
+    // folds the surface over itself: the other one is taken whatever the Hermite point says.
+    vec3 outward(0.0f);
+    outward[a] = is_inside(view.corner_value[corner]) ? 1.0f : -1.0f;
+    const auto faces_out = [&](const vec3& x, const vec3& y, const vec3& z) {
+      return glm::dot(glm::cross(y - x, z - x), outward) > 0.0f;
+    };
+    const bool sound02 = bend02 > 0.0f && faces_out(p0, p1, p2) && faces_out(p0, p2, p3);
+    const bool sound13 = bend13 > 0.0f && faces_out(p0, p1, p3) && faces_out(p1, p2, p3);
+    const bool split02 = sound02 != sound13 ? sound02 : (off02 != off13 ? off02 < off13 : bend02 >= bend13);
+    if (split02) {
+      triangles[2 * i] = {v[0], v[1], v[2]};
+      triangles[2 * i + 1] = {v[0], v[2], v[3]};
+    } else {
+      triangles[2 * i] = {v[0], v[1], v[3]};
+      triangles[2 * i + 1] = {v[1], v[2], v[3]};
+    }
+  }
+};
+
+// Angle-gated normal smoothing: a vertex's normal averaged with those of the vertices in its
+// cell and the six face-neighbouring cells that lie within the angle of it (cos_angle).
+struct SmoothNormalsPass {
+  SparseGridView view;
+  const uint64_t* vertex_cell;
+  const vec3* normals_in;
+  vec3* normals_out;
+  float cos_angle;
+
+  GWNRT_HD void operator()(uint64_t v) const {
+    const vec3 n0 = normals_in[v];
+    vec3 sum = n0;
+    const GridCoord cell = view.coord_of_item(vertex_cell[v]);
+    for (int k = 0; k < 6; ++k) {
+      GridCoord nb = cell;
+      nb[k >> 1] += (k & 1) ? 1 : -1;
+      const uint64_t item = view.item_of(nb, 0);
+      if (item == ~uint64_t(0)) continue;
+      const uint32_t first = view.cell_vertex_offset[item], count = view.cell_vertex_count[item];
+      for (uint32_t j = first; j < first + count; ++j)
+        if (glm::dot(normals_in[j], n0) >= cos_angle) sum += normals_in[j];
+    }
+    const float length = glm::length(sum);
+    normals_out[v] = length > 0.0f ? sum / length : n0;
+  }
+};
+
+}  // namespace gwnrt

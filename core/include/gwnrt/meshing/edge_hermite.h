@@ -1,0 +1,138 @@
+// Where S crosses a grid edge: the Hermite data of dual contouring (a point of S on the edge and
+// S's outward normal there), exact on sheet pieces and a bracketed root on smooth ones.
+// Host-and-device.
+#pragma once
+
+#include "gwnrt/field/evaluate_winding.h"
+#include "gwnrt/geometry/model_view.h"
+#include "gwnrt/trace/ray.h"
+
+namespace gwnrt {
+
+// Crossings of M visited along one edge before giving up (an edge through a stack of hundreds
+// of coincident triangles); the point found so far is kept and `capped` says so.
+inline constexpr int kMaxEdgeCrossings = 256;
+// Steps of the bracketed root search on a smooth piece: Illinois' regula falsi halves the
+// bracket at least every third step, so 60 steps take any bracket below float round-off.
+inline constexpr int kMaxRootSteps = 60;
+// The root is found to this fraction of the edge: far below the 0.05 cell the output promises.
+inline constexpr float kRootTolerance = 1e-4f;
+// w is sampled this fraction of the edge before a crossing of M, for its value on the near
+// side (continuous up to the crossing: the cone's field and the other triangles'); intervals
+// between crossings shorter than twice this are taken as constant.
+inline constexpr float kCrossingOffset = 1e-3f;
+
+enum class HermiteKind : uint8_t { kSheet = 0, kSmooth = 1, kFallback = 2 };
+
+struct HermitePoint {
+  vec3 point{0.0f};
+  vec3 normal{0.0f};                      // unit, out of {w > w*}
+  uint32_t source_triangle = kEmptyLane;  // input index, for a sheet crossing
+  HermiteKind kind = HermiteKind::kFallback;
+  bool capped = false;  // kMaxEdgeCrossings or kMaxRootSteps was reached
+};
+
+namespace detail {
+
+// f = w − w* on the bracket [ta, tb] of one smooth interval (fa, fb of different signs, inside
+// meaning f > 0): Illinois' regula falsi, a bracketed secant method that needs w alone (a Newton
+// step needs ∇w, which the crossing method evaluates at a finer cone beta: several times w's
+// cost), then the normal from ∇w at the root.
+template <class Value>
+GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOptions& winding, const vec3& p0,
+                                         const vec3& direction, float h, float ta, float fa, float tb, float fb,
+                                         Value value) {
+  HermitePoint out;
+  out.kind = HermiteKind::kSmooth;
+  const bool a_inside = fa > 0.0f;
+  int side = 0;  // which end was kept last (Illinois halves the kept end's value)
+  float t = 0.5f * (ta + tb);
+  int step = 0;
+  for (; step < kMaxRootSteps && tb - ta > kRootTolerance * h; ++step) {
+    t = fb != fa ? tb - fb * (tb - ta) / (fb - fa) : 0.5f * (ta + tb);
+    if (!(t > ta && t < tb)) t = 0.5f * (ta + tb);
+    const float ft = value(t);
+    if ((ft > 0.0f) == a_inside) {
+      ta = t;
+      fa = ft;
+      if (side == -1) fb *= 0.5f;
+      side = -1;
+    } else {
+      tb = t;
+      fb = ft;
+      if (side == 1) fa *= 0.5f;
+      side = 1;
+    }
+  }
+  out.capped = step == kMaxRootSteps;
+  t = 0.5f * (ta + tb);
+  out.point = p0 + t * direction;
+  const vec3 g = evaluate_winding(m, out.point, winding, true, false).gradient;
+  const float length = glm::length(g);
+  out.normal = length > 0.0f && is_finite(length) ? -g / length : (a_inside ? direction : -direction);
+  return out;
+}
+
+}  // namespace detail
+
+// The point where S crosses the edge from p0 to p0 + h·e_axis, f0 = w(p0) − w* and f1 = w(end)
+// − w* of different signs (inside: f > 0). Along the edge w is continuous except at crossings
+// of M, where it jumps by the crossing's jump; walking from p0, the first place where f changes
+// sign is either within an interval between crossings (a smooth piece: a bracketed root) or at a
+// crossing (a sheet: the exact ray–triangle point and the triangle's normal, turned outward).
+// Off a cone (a closed mesh) and with exact w, w is constant between crossings and no w is
+// evaluated at all.
+GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
+                                          const vec3& p0, int axis, float h, float f0, float f1) {
+  vec3 direction(0.0f);
+  direction[axis] = 1.0f;
+  const RayFrame frame = make_ray_frame(p0, direction);
+  const auto value = [&](float t) { return evaluate_winding(m, p0 + t * direction, winding).w - level; };
+  const bool piecewise_constant =
+      m.cone.triangle_count == 0 && resolve_winding_method(m, winding.method) == WindingMethod::kCrossing;
+  const float offset = kCrossingOffset * h;
+  float t_start = 0.0f, f_start = f0;
+  uint32_t index_after = kEmptyLane;
+  bool capped = true;
+  for (int k = 0; k < kMaxEdgeCrossings; ++k) {
+    CrossingHit hit;
+    const bool found = next_crossing(m.triangles.bvh, m.triangles.vertices, frame, t_start, index_after, h, hit);
+    const float t_end = found ? hit.t : h;
+    float f_end = f1;
+    if (found) f_end = piecewise_constant || t_end - t_start < 2.0f * offset ? f_start : value(t_end - offset);
+    if ((f_start > 0.0f) != (f_end > 0.0f)) {
+      const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
+      return detail::smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value);
+    }
+    if (!found) {
+      capped = false;
+      break;
+    }
+    const float f_after = f_end + float(hit.jump);
+    if ((f_end > 0.0f) != (f_after > 0.0f)) {
+      HermitePoint out;
+      out.kind = HermiteKind::kSheet;
+      out.point = p0 + hit.t * direction;
+      const vec3* v = m.triangles.vertices + 3 * hit.index;
+      vec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+      // Outward is where w is lower: against the edge where w jumps up along it.
+      if ((n[axis] > 0.0f) == (hit.jump > 0)) n = -n;
+      const float length = glm::length(n);
+      out.normal = length > 0.0f && is_finite(length) ? n / length : (f_after > 0.0f ? -direction : direction);
+      out.source_triangle = m.triangles.triangle_ids[hit.index];
+      return out;
+    }
+    t_start = hit.t;
+    index_after = hit.index;
+    f_start = f_after;
+  }
+  // The signs along the edge did not reproduce f1's (round-off within a crossing's width), or the
+  // cap was hit: the edge's midpoint, the normal along the edge.
+  HermitePoint out;
+  out.point = p0 + (0.5f * h) * direction;
+  out.normal = f0 > 0.0f ? direction : -direction;
+  out.capped = capped;
+  return out;
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,77 @@
+// Meshing S = ∂{w > w*}: sparse, manifold dual contouring on a grid (docs/design.md, meshing).
+// The output is closed by construction: its faces are dual to the grid edges whose corner
+// signs differ, and the signs are exact wherever the winding method is.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "gwnrt/field/evaluate_winding.h"
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/meshing/surface_mesh.h"
+#include "gwnrt/status.h"
+
+namespace gwnrt {
+
+enum class MeshingMethod : uint32_t { kDualContouring = 0, kMarchingCubes = 1 };
+
+enum MeshAttribute : uint32_t {
+  kAttributeSource = 1u << 0,  // nearest source triangle + barycentrics
+  kAttributeUv = 1u << 1,
+  kAttributeColor = 1u << 2,
+};
+
+struct MeshingOptions {
+  // Cells along the longest side of the box that holds S, or (when > 0) the cell size itself.
+  uint32_t resolution = 256;
+  float cell_size = 0.0f;
+  float level = 0.5f;  // w*
+  MeshingMethod method = MeshingMethod::kDualContouring;
+  // Vertex normals averaged with the neighbouring cells' within this angle (degrees); 0: off.
+  float smooth_angle = 30.0f;
+  bool soup = false;  // three vertices of its own per triangle
+  uint32_t attributes = 0;
+  WindingOptions winding;  // how w is evaluated at the corners (auto: exact where it wins)
+  // Refused (with what it would need) when the pipeline's arrays would exceed this many bytes.
+  uint64_t memory_budget = uint64_t(8) << 30;
+  // When given: work items done, and the items known so far (grown as each pass is sized).
+  std::atomic<size_t>* progress = nullptr;
+  std::atomic<size_t>* progress_total = nullptr;
+};
+
+struct MeshingPassTimes {
+  double scout = 0, corners = 0, edges = 0, vertices = 0, faces = 0, smoothing = 0, output = 0;
+};
+
+struct MeshingStats {
+  uint32_t grid[3] = {0, 0, 0};  // cells per axis
+  float cell_size = 0;
+  uint64_t active_blocks = 0;     // blocks of kBlockCells³ cells that S may meet
+  uint64_t evaluated_blocks = 0;  // with their corners' neighbours
+  uint64_t corners = 0;           // corner values evaluated
+  uint64_t crossing_edges = 0;    // sign-changing edges (one quad each)
+  uint64_t sheet_edges = 0, smooth_edges = 0, fallback_edges = 0, capped_edges = 0;
+  uint64_t multi_component_cells = 0;  // cells with two or more vertices
+  uint64_t open_edges = 0;  // sign-changing edges whose four cells were not all active (0 unless a bound failed)
+  uint64_t bytes = 0;       // the pipeline's largest arrays together, at their peak
+  MeshingPassTimes seconds;
+  std::string message;  // e.g. why the mesh is empty
+};
+
+// "1.5 GiB", "312 MiB": sizes in the mesher's messages.
+inline std::string byte_size_text(uint64_t bytes) {
+  const double gib = double(bytes) / double(uint64_t(1) << 30);
+  if (gib >= 1.0)
+    return std::to_string(int(gib * 10 + 0.5) / 10) + "." + std::to_string(int(gib * 10 + 0.5) % 10) + " GiB";
+  return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB";
+}
+
+// Meshes S for the options. An empty S (no corner inside, or all inside) gives an empty mesh, a
+// success and stats->message saying so. Fails on a resolution of 0, a cell size that is not
+// finite and > 0, a grid beyond the memory budget (saying what it would need), a level that is
+// not finite or 0 (S is then unbounded), a model built without sheets for another level.
+Status extract_surface(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out,
+                       MeshingStats* stats = nullptr);
+
+}  // namespace gwnrt

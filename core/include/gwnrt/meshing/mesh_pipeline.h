@@ -1,0 +1,290 @@
+// The mesher's driver, written once over a backend (the TBB one: core/src/meshing/
+// host_backend.h; CUDA/CUB: cuda/): it sizes the arrays, runs the passes of
+// meshing/dual_contouring.h over their items and compacts with exclusive scans. A backend
+// provides Array<T> (resize, data, size), parallel_for(n, fn), exclusive_scan(in, n, out) ->
+// total, and to_host(array, i) for the few values the driver reads back.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "gwnrt/meshing/dual_contouring.h"
+#include "gwnrt/meshing/extract_surface.h"
+#include "gwnrt/trace/march_regions.h"
+
+namespace gwnrt {
+
+namespace detail {
+
+// The cell-size-independent part of the grid: the box that holds S (M's padded box for the
+// sheets, the march boxes for the smooth pieces of this level).
+inline Aabb surface_box(const ModelView& m, float level) {
+  Aabb box = crossing_box(m);
+  for (uint32_t r = 0; r < march_box_count(m, level); ++r) box.extend(march_box(m, level, r));
+  return box;
+}
+
+class PassClock {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return s;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace detail
+
+// Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
+// which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats.
+template <class Backend>
+Status run_dual_contouring(Backend& backend, const ModelView& model, const MeshingOptions& options,
+                           const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
+  using U32 = typename Backend::template Array<uint32_t>;
+  detail::PassClock clock;
+  uint64_t bytes_live = 0;
+  const auto reserve = [&](uint64_t bytes, const char* what) -> Status {
+    bytes_live += bytes;
+    stats.bytes = std::max(stats.bytes, bytes_live);
+    if (bytes_live > options.memory_budget)
+      return {StatusCode::kOutOfMemory, std::string("meshing at ") + std::to_string(grid.cells[0]) + "x" +
+                                            std::to_string(grid.cells[1]) + "x" + std::to_string(grid.cells[2]) +
+                                            " cells needs at least " + byte_size_text(bytes_live) + " (" + what +
+                                            "), beyond the memory budget of " + byte_size_text(options.memory_budget)};
+    return Status::Ok();
+  };
+
+  // 1. Scouting, coarse to fine: a block of 2^L·kBlockCells cells is split only when S may meet it.
+  const int32_t corners_max = std::max({grid.cells[0], grid.cells[1], grid.cells[2]}) + 1;
+  int level_top = 0;
+  while ((int64_t(kBlockCells) << level_top) * 8 < corners_max) ++level_top;
+  typename Backend::template Array<GridCoord> candidates, kept;
+  {
+    const int32_t size = kBlockCells << level_top;
+    const int32_t n[3] = {(grid.cells[0] + size) / size, (grid.cells[1] + size) / size, (grid.cells[2] + size) / size};
+    candidates.resize(uint64_t(n[0]) * n[1] * n[2]);
+    GridCoord* c = candidates.data();
+    backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
+      c[i] = {int32_t(i % n[0]), int32_t((i / n[0]) % n[1]), int32_t(i / (uint64_t(n[0]) * n[1]))};
+    });
+  }
+  for (int level = level_top;; --level) {
+    const int32_t size = kBlockCells << level;
+    U32 keep, offset;
+    keep.resize(candidates.size());
+    offset.resize(candidates.size());
+    {
+      const GridCoord* c = candidates.data();
+      uint32_t* k = keep.data();
+      backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
+        const GridCoord b = c[i];
+        bool meets = false;
+        if (b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2]) {
+          const vec3 lo = grid.corner_position({b.x * size, b.y * size, b.z * size});
+          const vec3 hi = grid.corner_position({(b.x + 1) * size, (b.y + 1) * size, (b.z + 1) * size});
+          meets = scout.may_meet(lo, hi);
+        }
+        k[i] = meets ? 1u : 0u;
+      });
+    }
+    const uint64_t count = backend.exclusive_scan(keep.data(), keep.size(), offset.data());
+    if (Status s = reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
+    bytes_live -= count * sizeof(GridCoord) * (level > 0 ? 9 : 1);
+    kept.resize(count);
+    {
+      const GridCoord* c = candidates.data();
+      const uint32_t *k = keep.data(), *o = offset.data();
+      GridCoord* dst = kept.data();
+      backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
+        if (k[i]) dst[o[i]] = c[i];
+      });
+    }
+    if (level == 0) break;
+    candidates.resize(count * 8);
+    const GridCoord* src = kept.data();
+    GridCoord* c = candidates.data();
+    backend.parallel_for(count * 8, [=] GWNRT_HD(uint64_t i) {
+      const GridCoord b = src[i / 8];
+      const int d = int(i % 8);
+      c[i] = {2 * b.x + (d & 1), 2 * b.y + ((d >> 1) & 1), 2 * b.z + ((d >> 2) & 1)};
+    });
+  }
+  stats.active_blocks = kept.size();
+  stats.seconds.scout = clock.lap();
+  if (kept.size() == 0) {
+    stats.message = "S does not meet the grid: no point has w above the level (an empty mesh)";
+    return Status::Ok();
+  }
+
+  // 2. Slots: the active blocks and the neighbours (+x, +y, +z) whose corners their cells read.
+  const uint64_t block_count = grid.block_count();
+  if (Status s = reserve(block_count * 8, "the block map"); !s.ok()) return s;
+  U32 needed_dense, slot_of_block;
+  needed_dense.resize(block_count);
+  slot_of_block.resize(block_count);
+  {
+    uint32_t* needed = needed_dense.data();
+    const GridCoord* b = kept.data();
+    backend.parallel_for(kept.size(), [=] GWNRT_HD(uint64_t i) {
+      for (int d = 0; d < 8; ++d) {
+        const GridCoord t{b[i].x + (d & 1), b[i].y + ((d >> 1) & 1), b[i].z + ((d >> 2) & 1)};
+        if (t.x < grid.blocks[0] && t.y < grid.blocks[1] && t.z < grid.blocks[2])
+          atomic_or(needed + grid.block_index(t.x, t.y, t.z), 1u << d);
+      }
+    });
+  }
+  U32 is_slot;
+  is_slot.resize(block_count);
+  {
+    const uint32_t* needed = needed_dense.data();
+    uint32_t* f = is_slot.data();
+    backend.parallel_for(block_count, [=] GWNRT_HD(uint64_t i) { f[i] = needed[i] != 0; });
+  }
+  const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, slot_of_block.data());
+  // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
+  const uint64_t per_slot = uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8;
+  if (Status s = reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
+  U32 block_of_slot, needed_from;
+  block_of_slot.resize(slots);
+  needed_from.resize(slots);
+  {
+    const uint32_t *f = is_slot.data(), *needed = needed_dense.data();
+    uint32_t *map = slot_of_block.data(), *bos = block_of_slot.data(), *nf = needed_from.data();
+    backend.parallel_for(block_count, [=] GWNRT_HD(uint64_t i) {
+      if (f[i]) {
+        bos[map[i]] = uint32_t(i);
+        nf[map[i]] = needed[i];
+      } else {
+        map[i] = kEmptyLane;
+      }
+    });
+  }
+  stats.evaluated_blocks = slots;
+
+  SparseGridView view;
+  view.grid = grid;
+  view.slot_of_block = slot_of_block.data();
+  view.block_of_slot = block_of_slot.data();
+  view.needed_from = needed_from.data();
+
+  // 3. Corner values.
+  typename Backend::template Array<float> corner_value;
+  corner_value.resize(slots * kBlockItems);
+  if (options.progress_total) options.progress_total->fetch_add(slots * kBlockCells * kBlockCells);
+  backend.parallel_for(slots * kBlockCells * kBlockCells,
+                       CornerColumnPass{view, model, options.winding, options.level, corner_value.data()}, 4,
+                       options.progress);
+  view.corner_value = corner_value.data();
+  stats.seconds.corners = clock.lap();
+
+  // 4. Edges and their Hermite data.
+  typename Backend::template Array<uint8_t> edge_mask;
+  U32 edge_count, edge_offset;
+  edge_mask.resize(slots * kBlockItems);
+  edge_count.resize(slots * kBlockItems);
+  edge_offset.resize(slots * kBlockItems);
+  backend.parallel_for(slots * kBlockItems, EdgeCountPass{view, edge_mask.data(), edge_count.data()});
+  const uint64_t edge_total = backend.exclusive_scan(edge_count.data(), edge_count.size(), edge_offset.data());
+  if (edge_total >= kEmptyLane / 2)
+    return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(edge_total) + " crossing edges, beyond 2^31"};
+  if (Status s = reserve(edge_total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
+      !s.ok())
+    return s;
+  view.edge_mask = edge_mask.data();
+  view.edge_offset = edge_offset.data();
+  stats.corners = 0;
+  typename Backend::template Array<uint64_t> edges;
+  edges.resize(edge_total);
+  backend.parallel_for(slots * kBlockItems, EdgeListPass{view, edges.data()});
+  typename Backend::template Array<HermitePoint> hermite;
+  hermite.resize(edge_total);
+  if (options.progress_total) options.progress_total->fetch_add(edge_total);
+  backend.parallel_for(edge_total,
+                       HermitePass{view, model, options.winding, options.level, edges.data(), hermite.data()}, 16,
+                       options.progress);
+  stats.crossing_edges = edge_total;
+  for (uint64_t i = 0; i < edge_total; ++i) {
+    const HermitePoint& h = backend.to_host(hermite, i);
+    stats.sheet_edges += h.kind == HermiteKind::kSheet;
+    stats.smooth_edges += h.kind == HermiteKind::kSmooth;
+    stats.fallback_edges += h.kind == HermiteKind::kFallback;
+    stats.capped_edges += h.capped;
+  }
+  stats.seconds.edges = clock.lap();
+  if (edge_total == 0) {
+    stats.message = "S does not cross the grid: every corner is on one side of the level (an empty mesh)";
+    return Status::Ok();
+  }
+
+  // 5. Cells: one vertex per component.
+  U32 cell_parts, cell_count, cell_offset;
+  cell_parts.resize(slots * kBlockItems);
+  cell_count.resize(slots * kBlockItems);
+  cell_offset.resize(slots * kBlockItems);
+  backend.parallel_for(slots * kBlockItems, CellCountPass{view, cell_parts.data(), cell_count.data()});
+  view.cell_parts = cell_parts.data();
+  const uint64_t vertex_total = backend.exclusive_scan(cell_count.data(), cell_count.size(), cell_offset.data());
+  if (Status s = reserve(vertex_total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
+  view.cell_vertex_count = cell_count.data();
+  view.cell_vertex_offset = cell_offset.data();
+  typename Backend::template Array<vec3> positions, normals;
+  typename Backend::template Array<uint64_t> vertex_cell;
+  positions.resize(vertex_total);
+  normals.resize(vertex_total);
+  vertex_cell.resize(vertex_total);
+  backend.parallel_for(slots * kBlockItems,
+                       CellVertexPass{view, hermite.data(), positions.data(), normals.data(), vertex_cell.data()});
+  for (uint64_t i = 0; i < cell_count.size(); ++i) stats.multi_component_cells += backend.to_host(cell_count, i) > 1;
+  stats.seconds.vertices = clock.lap();
+
+  // 6. Faces: two triangles per crossing edge; edges missing a cell are dropped.
+  typename Backend::template Array<uvec3> triangles;
+  triangles.resize(2 * edge_total);
+  backend.parallel_for(edge_total, QuadPass{view, edges.data(), hermite.data(), positions.data(), triangles.data()});
+  U32 keep_face, face_offset;
+  keep_face.resize(2 * edge_total);
+  face_offset.resize(2 * edge_total);
+  {
+    const uvec3* t = triangles.data();
+    uint32_t* k = keep_face.data();
+    backend.parallel_for(2 * edge_total, [=] GWNRT_HD(uint64_t i) { k[i] = t[i].x != kEmptyLane; });
+  }
+  const uint64_t face_total = backend.exclusive_scan(keep_face.data(), keep_face.size(), face_offset.data());
+  stats.open_edges = (2 * edge_total - face_total) / 2;
+  stats.seconds.faces = clock.lap();
+
+  // 7. Normals.
+  if (options.smooth_angle > 0.0f) {
+    typename Backend::template Array<vec3> smoothed;
+    smoothed.resize(vertex_total);
+    backend.parallel_for(vertex_total, SmoothNormalsPass{view, vertex_cell.data(), normals.data(), smoothed.data(),
+                                                         cosf(options.smooth_angle * kDegree)});
+    normals = std::move(smoothed);
+  }
+  stats.seconds.smoothing = clock.lap();
+
+  // 8. Output (indexed).
+  out.positions.resize(vertex_total);
+  out.normals.resize(vertex_total);
+  out.triangles.resize(face_total);
+  backend.copy_out(positions, out.positions.data());
+  backend.copy_out(normals, out.normals.data());
+  {
+    const uvec3* t = triangles.data();
+    const uint32_t *k = keep_face.data(), *o = face_offset.data();
+    uvec3* dst = out.triangles.data();
+    backend.parallel_for(2 * edge_total, [=](uint64_t i) {
+      if (k[i]) dst[o[i]] = t[i];
+    });
+  }
+  stats.seconds.output = clock.lap();
+  return Status::Ok();
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,93 @@
+// Where a cell's vertex is solved: the quadratic error function of dual contouring, Σ (n_i ·
+// (x − p_i))² over a component's Hermite points p_i and unit normals n_i, minimised robustly.
+// Host-and-device.
+#pragma once
+
+#include "gwnrt/hd.h"
+
+namespace gwnrt {
+
+// Directions whose eigenvalue of AᵀA is below this fraction of the largest are left to the
+// mass point (a truncated pseudo-inverse): near-parallel normals (a flat or gently curved
+// patch) then put the vertex on the plane at the points' centre instead of far along the
+// nearly free direction. 0.1 is the usual truncation of dual contouring's SVD (Ju et al.;
+// Lindstrom's QEF): a crease whose two planes meet at 18° or more keeps its sharp direction.
+inline constexpr double kQefTruncation = 0.1;
+// Jacobi sweeps for the 3x3 eigen-decomposition: it converges quadratically, 2-4 sweeps reach
+// double precision; the cap keeps the loop bounded.
+inline constexpr int kQefMaxSweeps = 12;
+
+struct Qef {
+  Sym3<double> ata;       // Σ n nᵀ
+  dvec3 atb{0.0};         // Σ n (n · p)
+  dvec3 point_sum{0.0};   // Σ p
+  dvec3 normal_sum{0.0};  // Σ n
+  int count = 0;
+
+  GWNRT_HD void add(const dvec3& p, const dvec3& n) {
+    ata += Sym3<double>{n.x * n.x, n.x * n.y, n.x * n.z, n.y * n.y, n.y * n.z, n.z * n.z};
+    atb += n * glm::dot(n, p);
+    point_sum += p;
+    normal_sum += n;
+    ++count;
+  }
+  GWNRT_HD dvec3 mass_point() const { return count > 0 ? point_sum / double(count) : dvec3(0.0); }
+};
+
+// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations: a = V diag(λ) Vᵀ,
+// the eigenvectors in the columns of v.
+GWNRT_HD inline void symmetric_eigen(const Sym3<double>& a, double lambda[3], dvec3 v[3]) {
+  double m[3][3] = {{a.xx, a.xy, a.xz}, {a.xy, a.yy, a.yz}, {a.xz, a.yz, a.zz}};
+  double r[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int sweep = 0; sweep < kQefMaxSweeps; ++sweep) {
+    const double off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
+    const double diag = m[0][0] * m[0][0] + m[1][1] * m[1][1] + m[2][2] * m[2][2];
+    if (!(off > 1e-30 * diag)) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (m[p][q] == 0.0) continue;
+        // The rotation that zeroes m[p][q] (the smaller angle: Numerical Recipes' choice of t).
+        const double theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+        const double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // m <- m G
+          const double mkp = m[k][p], mkq = m[k][q];
+          m[k][p] = c * mkp - s * mkq;
+          m[k][q] = s * mkp + c * mkq;
+        }
+        for (int k = 0; k < 3; ++k) {  // m <- Gᵀ m
+          const double mpk = m[p][k], mqk = m[q][k];
+          m[p][k] = c * mpk - s * mqk;
+          m[q][k] = s * mpk + c * mqk;
+        }
+        for (int k = 0; k < 3; ++k) {  // r <- r G
+          const double rkp = r[k][p], rkq = r[k][q];
+          r[k][p] = c * rkp - s * rkq;
+          r[k][q] = s * rkp + c * rkq;
+        }
+      }
+  }
+  for (int i = 0; i < 3; ++i) {
+    lambda[i] = m[i][i];
+    v[i] = dvec3(r[0][i], r[1][i], r[2][i]);
+  }
+}
+
+// The minimiser nearest the mass point m̄ in the retained directions: x = m̄ + Σ_i v_i (v_iᵀ(b −
+// A m̄)) / λ_i over the eigenvalues λ_i >= kQefTruncation · λ_max, then clamped to [lo, hi] (the
+// cell). A component of one Hermite point (or parallel normals) stays at its mass point along
+// the free directions.
+GWNRT_HD inline dvec3 solve_qef(const Qef& q, const dvec3& lo, const dvec3& hi) {
+  const dvec3 mass = q.mass_point();
+  double lambda[3];
+  dvec3 v[3];
+  symmetric_eigen(q.ata, lambda, v);
+  const double largest = fmax(lambda[0], fmax(lambda[1], lambda[2]));
+  const dvec3 residual = q.atb - q.ata.apply(mass);
+  dvec3 x = mass;
+  for (int i = 0; i < 3; ++i)
+    if (largest > 0 && lambda[i] >= kQefTruncation * largest) x += v[i] * (glm::dot(v[i], residual) / lambda[i]);
+  return glm::clamp(x, lo, hi);
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,378 @@
+// write_surface_mesh (gwnrt/io/mesh_writer.h). Records are formatted straight into one fixed
+// buffer that is flushed with fwrite: a soup is written without building it, and a
+// million-triangle mesh costs a few hundred fwrite calls rather than an iostream call per number.
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "gwnrt/io/mesh_writer.h"
+#include "message.h"
+
+namespace gwnrt {
+namespace {
+
+std::string errno_text(int err) {
+  return err ? std::error_code(err, std::generic_category()).message() : std::string("unknown error");
+}
+
+// Output file
+
+class OutFile {
+ public:
+  // The longest record one room() call may hold: an OBJ face line with three v/vt/vn corners of
+  // 10-digit indices, or a vertex line of six 15-character floats, with margin.
+  static constexpr size_t kMaxRecord = 256;
+
+  explicit OutFile(std::string path) : path_(std::move(path)) {}
+  OutFile(const OutFile&) = delete;
+  OutFile& operator=(const OutFile&) = delete;
+
+  ~OutFile() {
+    if (!f_) return;
+    std::fclose(f_);
+    // Only reached when close() did not succeed (an error, or an exception unwinding): a
+    // truncated OBJ would otherwise pass for a smaller mesh. A device or pipe is left alone.
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(path_, ec)) std::filesystem::remove(path_, ec);
+  }
+
+  Status open() {
+    errno = 0;
+    f_ = std::fopen(path_.c_str(), "wb");
+    if (!f_) return {StatusCode::kIoError, cat(path_, ": cannot open for writing: ", errno_text(errno))};
+    buf_.resize(size_t(1) << 20);
+    return Status::Ok();
+  }
+
+  // Space for up to kMaxRecord bytes; the caller writes there and hands the end to commit().
+  char* room() {
+    if (buf_.size() - used_ < kMaxRecord) flush();
+    return buf_.data() + used_;
+  }
+  void commit(char* end) { used_ = static_cast<size_t>(end - buf_.data()); }
+
+  void write(std::string_view s) {
+    while (!s.empty()) {
+      const size_t n = std::min(s.size(), kMaxRecord);
+      char* p = room();
+      std::copy_n(s.data(), n, p);
+      commit(p + n);
+      s.remove_prefix(n);
+    }
+  }
+
+  // Flushes and closes, checking both: fclose reports errors of writes the kernel deferred
+  // (a full disk, a network file system).
+  Status close() {
+    flush();
+    std::FILE* f = f_;
+    f_ = nullptr;
+    errno = 0;
+    const bool closed = std::fclose(f) == 0;
+    if (!failed_ && !closed) {
+      failed_ = true;
+      err_ = errno;
+    }
+    if (failed_) {
+      std::error_code ec;
+      if (std::filesystem::is_regular_file(path_, ec)) std::filesystem::remove(path_, ec);
+      return {StatusCode::kIoError, cat(path_, ": write failed: ", errno_text(err_))};
+    }
+    return Status::Ok();
+  }
+
+ private:
+  void flush() {
+    if (used_ > 0 && !failed_) {
+      errno = 0;
+      if (std::fwrite(buf_.data(), 1, used_, f_) != used_) {
+        failed_ = true;
+        err_ = errno;
+      }
+    }
+    used_ = 0;  // after a failure the rest is dropped; close() reports it
+  }
+
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  std::vector<char> buf_;
+  size_t used_ = 0;
+  bool failed_ = false;
+  int err_ = 0;
+};
+
+// Checks
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return ext;
+}
+
+template <glm::length_t N>
+bool all_finite(const glm::vec<N, float>& v) {
+  for (int k = 0; k < N; ++k) {
+    if (!is_finite(v[k])) return false;
+  }
+  return true;
+}
+
+template <glm::length_t N>
+std::string text(const glm::vec<N, float>& v) {
+  std::string s = "(";
+  for (int k = 0; k < N; ++k) s += cat(k ? ", " : "", v[k]);
+  return s + ")";
+}
+
+template <class T>
+Status check_size(const std::string& path, const std::vector<T>& a, const char* name, size_t n) {
+  if (a.empty() || a.size() == n) return Status::Ok();
+  return {StatusCode::kInvalidMesh, cat(path, ": inconsistent mesh: ", a.size(), " ", name, " for ", n,
+                                        " positions (a per-vertex array is empty or as long as positions)")};
+}
+
+template <glm::length_t N>
+Status check_finite(const std::string& path, const std::vector<glm::vec<N, float>>& a, const char* name) {
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!all_finite(a[i])) {
+      return {StatusCode::kInvalidMesh, cat(path, ": vertex ", i, " has a non-finite ", name, " ", text(a[i]))};
+    }
+  }
+  return Status::Ok();
+}
+
+Status check_mesh(const std::string& path, const SurfaceMesh& m) {
+  const size_t n = m.positions.size();
+  for (Status s : {check_size(path, m.normals, "normals", n), check_size(path, m.uvs, "uvs", n),
+                   check_size(path, m.colors, "colors", n), check_size(path, m.source_triangles, "source_triangles", n),
+                   check_size(path, m.source_barycentrics, "source_barycentrics", n)}) {
+    if (!s.ok()) return s;
+  }
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      if (m.triangles[t][k] >= n) {
+        return {StatusCode::kInvalidMesh, cat(path, ": triangle ", t, " refers to vertex ", m.triangles[t][k],
+                                              " but the mesh has ", n, " vertices")};
+      }
+    }
+  }
+  for (Status s : {check_finite(path, m.positions, "position"), check_finite(path, m.normals, "normal"),
+                   check_finite(path, m.uvs, "uv"), check_finite(path, m.colors, "color"),
+                   check_finite(path, m.source_barycentrics, "source barycentric")}) {
+    if (!s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+// Calls fn(i) for the mesh vertex behind each output vertex: each vertex once, or each
+// triangle corner in a soup.
+template <class Fn>
+void for_each_output_vertex(const SurfaceMesh& m, bool soup, Fn&& fn) {
+  if (soup) {
+    for (const uvec3& t : m.triangles) {
+      fn(t.x);
+      fn(t.y);
+      fn(t.z);
+    }
+  } else {
+    for (size_t i = 0; i < m.positions.size(); ++i) fn(i);
+  }
+}
+
+// The output triangle t: its own corners in a soup.
+uvec3 output_triangle(const SurfaceMesh& m, bool soup, size_t t) {
+  if (!soup) return m.triangles[t];
+  const auto b = static_cast<uint32_t>(3 * t);
+  return {b, b + 1, b + 2};
+}
+
+// PLY
+
+// Little-endian bytes by shifts, whatever the host's order (GCC merges them into one store on
+// a little-endian host).
+inline char* put_u32(char* p, uint32_t v) {
+  p[0] = static_cast<char>(v & 0xff);
+  p[1] = static_cast<char>((v >> 8) & 0xff);
+  p[2] = static_cast<char>((v >> 16) & 0xff);
+  p[3] = static_cast<char>(v >> 24);
+  return p + 4;
+}
+
+inline char* put_f32(char* p, float v) { return put_u32(p, std::bit_cast<uint32_t>(v)); }
+
+template <glm::length_t N>
+inline char* put_f32(char* p, const glm::vec<N, float>& v) {
+  for (int k = 0; k < N; ++k) p = put_f32(p, v[k]);
+  return p;
+}
+
+inline char to_u8(float c) { return static_cast<char>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f)); }
+
+void write_ply(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
+  const bool has_n = !m.normals.empty();
+  const bool has_c = !m.colors.empty();
+  const bool has_uv = !m.uvs.empty();
+  const bool has_st = !m.source_triangles.empty();
+  const bool has_sb = !m.source_barycentrics.empty();
+
+  std::string h = cat("ply\nformat binary_little_endian 1.0\ncomment written by gwnrt\nelement vertex ", nverts,
+                      "\nproperty float x\nproperty float y\nproperty float z\n");
+  if (has_n) h += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (has_c) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+  // `u v`: the names the project's PLY conventions and most readers (Assimp, Blender) accept.
+  if (has_uv) h += "property float u\nproperty float v\n";
+  if (has_st) h += "property uint source_triangle\n";
+  if (has_sb) h += "property float source_u\nproperty float source_v\n";
+  h += cat("element face ", m.triangles.size(), "\nproperty list uchar int vertex_indices\nend_header\n");
+  out.write(h);
+
+  for_each_output_vertex(m, soup, [&](size_t i) {
+    char* p = out.room();
+    p = put_f32(p, m.positions[i]);
+    if (has_n) p = put_f32(p, m.normals[i]);
+    if (has_c) {
+      for (int k = 0; k < 4; ++k) *p++ = to_u8(m.colors[i][k]);
+    }
+    if (has_uv) p = put_f32(p, m.uvs[i]);
+    if (has_st) p = put_u32(p, m.source_triangles[i]);
+    if (has_sb) p = put_f32(p, m.source_barycentrics[i]);
+    out.commit(p);
+  });
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const uvec3 tri = output_triangle(m, soup, t);
+    char* p = out.room();
+    *p++ = 3;
+    // Indices are below 2^31 (checked), so the uint bits are those of the declared int.
+    p = put_u32(p, tri.x);
+    p = put_u32(p, tri.y);
+    p = put_u32(p, tri.z);
+    out.commit(p);
+  }
+}
+
+// OBJ
+
+// The shortest text that reads back to the same float (at most 9 significant digits).
+inline char* put_float(char* p, float v) { return std::to_chars(p, p + 32, v).ptr; }
+
+inline char* put_index(char* p, uint64_t v) { return std::to_chars(p, p + 24, v).ptr; }
+
+template <glm::length_t N>
+inline char* put_floats(char* p, const glm::vec<N, float>& v) {
+  for (int k = 0; k < N; ++k) {
+    *p++ = ' ';
+    p = put_float(p, v[k]);
+  }
+  return p;
+}
+
+void write_obj(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
+  const bool has_n = !m.normals.empty();
+  const bool has_c = !m.colors.empty();
+  const bool has_uv = !m.uvs.empty();
+
+  out.write(cat("# written by gwnrt: ", nverts, " vertices, ", m.triangles.size(), " triangles\n"));
+  for_each_output_vertex(m, soup, [&](size_t i) {
+    char* p = out.room();
+    *p++ = 'v';
+    p = put_floats(p, m.positions[i]);
+    if (has_c) p = put_floats(p, glm::clamp(glm::vec3(m.colors[i]), 0.0f, 1.0f));
+    *p++ = '\n';
+    out.commit(p);
+  });
+  if (has_n) {
+    for_each_output_vertex(m, soup, [&](size_t i) {
+      char* p = out.room();
+      *p++ = 'v';
+      *p++ = 'n';
+      p = put_floats(p, m.normals[i]);
+      *p++ = '\n';
+      out.commit(p);
+    });
+  }
+  if (has_uv) {
+    for_each_output_vertex(m, soup, [&](size_t i) {
+      char* p = out.room();
+      *p++ = 'v';
+      *p++ = 't';
+      p = put_floats(p, m.uvs[i]);
+      *p++ = '\n';
+      out.commit(p);
+    });
+  }
+  // Every attribute is per vertex, so a corner's v, vt and vn indices are the same number.
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const uvec3 tri = output_triangle(m, soup, t);
+    char* p = out.room();
+    *p++ = 'f';
+    for (int k = 0; k < 3; ++k) {
+      const uint64_t i = uint64_t(tri[k]) + 1;
+      *p++ = ' ';
+      p = put_index(p, i);
+      if (has_uv || has_n) {
+        *p++ = '/';
+        if (has_uv) p = put_index(p, i);
+        if (has_n) {
+          *p++ = '/';
+          p = put_index(p, i);
+        }
+      }
+    }
+    *p++ = '\n';
+    out.commit(p);
+  }
+}
+
+Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
+  MeshFileFormat format = options.format;
+  if (format == MeshFileFormat::kAuto) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".ply") {
+      format = MeshFileFormat::kPly;
+    } else if (ext == ".obj") {
+      format = MeshFileFormat::kObj;
+    } else {
+      return {StatusCode::kInvalidArgument,
+              cat(path, ": unknown mesh file extension '", ext, "' (expected .ply or .obj, or give the format)")};
+    }
+  }
+  if (Status s = check_mesh(path, mesh); !s.ok()) return s;
+
+  // PLY indices are declared int; OBJ readers (ours included) index with 32 bits.
+  const bool ply = format == MeshFileFormat::kPly;
+  const uint64_t limit = ply ? uint64_t(1) << 31 : uint64_t(1) << 32;
+  const uint64_t nverts = options.soup ? 3 * uint64_t(mesh.triangles.size()) : uint64_t(mesh.positions.size());
+  if (nverts > limit) {
+    return {StatusCode::kInvalidMesh,
+            cat(path, ": too many vertices to write (", nverts, ", at most ", limit, " in ", ply ? "PLY" : "OBJ", ")")};
+  }
+
+  OutFile out(path);
+  if (Status s = out.open(); !s.ok()) return s;
+  if (ply) {
+    write_ply(out, mesh, options.soup, nverts);
+  } else {
+    write_obj(out, mesh, options.soup, nverts);
+  }
+  return out.close();
+}
+
+}  // namespace
+
+Status write_surface_mesh(const std::string& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
+  return guard_status(path.c_str(), [&] { return write_unguarded(path, mesh, options); });
+}
+
+}  // namespace gwnrt

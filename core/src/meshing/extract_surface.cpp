@@ -1,0 +1,134 @@
+#include "gwnrt/meshing/extract_surface.h"
+
+#include <cmath>
+#include <string>
+
+#include "gwnrt/meshing/mesh_pipeline.h"
+#include "meshing/host_backend.h"
+
+namespace gwnrt {
+namespace {
+
+// Cells per axis at most: grid coordinates stay far inside int32, and a corner's float position
+// still resolves a cell (2^21 cells of a box span 21 of float's 24 bits).
+constexpr int32_t kMaxGridCells = 1 << 21;
+
+Status validate_options(const MeshingOptions& o) {
+  if (o.cell_size != 0.0f && !(o.cell_size > 0.0f && std::isfinite(o.cell_size)))
+    return {StatusCode::kInvalidArgument, "meshing: the cell size must be a finite number > 0"};
+  if (o.cell_size == 0.0f && o.resolution == 0)
+    return {StatusCode::kInvalidArgument, "meshing: the resolution must be at least 1 cell"};
+  if (!std::isfinite(o.level)) return {StatusCode::kInvalidArgument, "meshing: the level w* must be a finite number"};
+  if (o.level == 0.0f)
+    return {StatusCode::kInvalidArgument,
+            "meshing: level 0 gives no bounded surface (w tends to 0 far from the mesh, on either side)"};
+  if (!(o.smooth_angle >= 0.0f && o.smooth_angle <= 180.0f))
+    return {StatusCode::kInvalidArgument, "meshing: the smoothing angle must lie in [0, 180] degrees"};
+  if (o.method != MeshingMethod::kDualContouring)
+    return {StatusCode::kUnavailable, "meshing: marching cubes is not available yet (use dual contouring)"};
+  if (uint32_t(o.winding.method) >= kWindingMethodCount)
+    return {StatusCode::kInvalidArgument, "meshing: unknown winding method"};
+  if (o.winding.taylor.order < 0 || o.winding.taylor.order > 2 || !(o.winding.taylor.beta > 0.0f) ||
+      !std::isfinite(o.winding.taylor.beta))
+    return {StatusCode::kInvalidArgument, "meshing: Taylor order must be 0, 1 or 2 and beta finite and > 0"};
+  if (o.attributes & ~uint32_t(kAttributeSource))
+    return {StatusCode::kUnavailable, "meshing: only the source attribute (nearest triangle) is available yet"};
+  return Status::Ok();
+}
+
+// The grid: cells of the requested size (or the longest side of M's box over the resolution:
+// the box that holds every sheet, and for a closed mesh all of S), covering the box that holds
+// S with one cell to spare on every side, so that the outermost corners lie off S and the
+// output closes.
+Status make_grid(const ModelView& view, const MeshingOptions& o, MeshGrid& grid) {
+  const Aabb sheets = crossing_box(view);
+  const Aabb box = detail::surface_box(view, o.level);
+  const vec3 mesh_extent = sheets.hi - sheets.lo;
+  const float longest = std::max({mesh_extent.x, mesh_extent.y, mesh_extent.z});
+  const float cell = o.cell_size > 0.0f ? o.cell_size : longest / float(o.resolution);
+  if (!(cell > 0.0f) || !std::isfinite(cell))
+    return {StatusCode::kInvalidArgument, "meshing: the mesh's box has no extent to divide into cells"};
+  const vec3 extent = box.hi - box.lo;
+  for (int a = 0; a < 3; ++a) {
+    const double cells = std::ceil(double(extent[a]) / double(cell)) + 2.0;
+    if (!(cells <= double(kMaxGridCells)))
+      return {StatusCode::kInvalidArgument, "meshing: " + std::to_string(uint64_t(std::min(cells, 1e18))) +
+                                                " cells along an axis, beyond the " + std::to_string(kMaxGridCells) +
+                                                " the grid allows (a smaller resolution or a larger cell size)"};
+    grid.cells[a] = int32_t(cells);
+    grid.blocks[a] = (grid.cells[a] + 1 + kBlockCells - 1) / kBlockCells;
+  }
+  grid.cell = cell;
+  const vec3 span = cell * vec3(float(grid.cells[0]), float(grid.cells[1]), float(grid.cells[2]));
+  grid.origin = box.centre() - 0.5f * span;
+  return Status::Ok();
+}
+
+Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out, MeshingStats& stats) {
+  out = SurfaceMesh{};
+  if (Status s = validate_options(options); !s.ok()) return s;
+  const ModelView view = model.view();
+  MeshGrid grid;
+  if (Status s = make_grid(view, options, grid); !s.ok()) return s;
+  for (int a = 0; a < 3; ++a) stats.grid[a] = uint32_t(grid.cells[a]);
+  stats.cell_size = grid.cell;
+  // The sheets bound the distance to S only when classified for this level and exactly (the
+  // multipole's classification decides within a tolerance); otherwise the distance to M does.
+  ScoutQuery scout{view, options.level, options.winding.taylor.beta,
+                   view.sheet_level == options.level && model.sheet_side_tolerance() == 0.0f};
+  HostBackend backend;
+  if (Status s = run_dual_contouring(backend, view, options, grid, scout, out, stats); !s.ok()) {
+    out = SurfaceMesh{};
+    return s;
+  }
+  const size_t n = out.positions.size();
+  if (options.attributes & kAttributeSource) {
+    out.source_triangles.resize(n);
+    out.source_barycentrics.resize(n);
+    backend.parallel_for(
+        n,
+        [&](uint64_t i) {
+          const NearestPrimitive p = unsigned_distance(view.triangles, out.positions[i]);
+          out.source_triangles[i] = p.primitive;
+          out.source_barycentrics[i] = {p.u, p.v};
+        },
+        256);
+  }
+  if (options.soup) {
+    SurfaceMesh soup;
+    const size_t t = out.triangles.size();
+    soup.positions.resize(3 * t);
+    soup.normals.resize(3 * t);
+    soup.triangles.resize(t);
+    const bool source = !out.source_triangles.empty();
+    if (source) {
+      soup.source_triangles.resize(3 * t);
+      soup.source_barycentrics.resize(3 * t);
+    }
+    backend.parallel_for(t, [&](uint64_t f) {
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = out.triangles[f][k];
+        soup.positions[3 * f + k] = out.positions[v];
+        soup.normals[3 * f + k] = out.normals[v];
+        if (source) {
+          soup.source_triangles[3 * f + k] = out.source_triangles[v];
+          soup.source_barycentrics[3 * f + k] = out.source_barycentrics[v];
+        }
+      }
+      soup.triangles[f] = uvec3(uint32_t(3 * f), uint32_t(3 * f + 1), uint32_t(3 * f + 2));
+    });
+    out = std::move(soup);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status extract_surface(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out, MeshingStats* stats) {
+  MeshingStats local;
+  MeshingStats& s = stats ? *stats : local;
+  s = MeshingStats{};
+  return guard_status("extract_surface", [&] { return extract_unguarded(model, options, out, s); });
+}
+
+}  // namespace gwnrt

@@ -1,0 +1,575 @@
+// The mesh quality report (gwnrt/meshing/mesh_quality.h): topology by sorted undirected edges and
+// union-find, self-intersections by a BVH over the triangles and the exact pair test
+// (exact_predicates.cpp), distances to S by the model's signed distance one way and the tracer's
+// hits and a BVH over the output the other.
+#include "gwnrt/meshing/mesh_quality.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "gwnrt/batch.h"
+#include "gwnrt/field/distance.h"
+#include "gwnrt/geometry/bvh.h"
+#include "gwnrt/geometry/triangle_tree.h"
+#include "message.h"
+
+namespace gwnrt {
+namespace {
+
+// The checks every entry point makes: coordinates finite (the exact predicates and the weld's
+// order need numbers) and indices in range, each failure naming its element.
+Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
+  const std::vector<vec3>& pos = mesh.positions;
+  for (size_t i = 0; i < pos.size(); ++i) {
+    const vec3& p = pos[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      return {StatusCode::kInvalidMesh,
+              cat(where, ": vertex ", i, " has a non-finite coordinate (", p.x, ", ", p.y, ", ", p.z, ")")};
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.triangles[t][k];
+      if (v >= pos.size())
+        return {StatusCode::kInvalidMesh,
+                cat(where, ": triangle ", t, " refers to vertex ", v, " but there are ", pos.size(), " vertices")};
+    }
+  // Corners are numbered 3t + k in 32 bits, and triangle indices are reported in 32 bits.
+  if (mesh.triangles.size() > size_t(0xffffffffu) / 3)
+    return {StatusCode::kInvalidArgument, cat(where, ": more than 1431655765 triangles")};
+  return Status::Ok();
+}
+
+// Union-find over 32-bit ids, by path halving; the smaller root wins so the result does not
+// depend on the order of the unions.
+class DisjointSets {
+ public:
+  explicit DisjointSets(size_t n) : parent_(n) {
+    for (size_t i = 0; i < n; ++i) parent_[i] = uint32_t(i);
+  }
+  uint32_t find(uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return;
+    if (a < b) std::swap(a, b);
+    parent_[a] = b;
+  }
+
+ private:
+  std::vector<uint32_t> parent_;
+};
+
+// Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get the id of their
+// group in lexicographic order. Returns the number of distinct positions.
+uint32_t weld_positions(const std::vector<vec3>& pos, std::vector<uint32_t>& id) {
+  std::vector<uint32_t> order(pos.size());
+  for (size_t i = 0; i < pos.size(); ++i) order[i] = uint32_t(i);
+  auto less = [&](uint32_t a, uint32_t b) {
+    const vec3 &p = pos[a], &q = pos[b];
+    if (p.x != q.x) return p.x < q.x;
+    if (p.y != q.y) return p.y < q.y;
+    if (p.z != q.z) return p.z < q.z;
+    return a < b;
+  };
+  tbb::parallel_sort(order.begin(), order.end(), less);
+  id.assign(pos.size(), 0);
+  uint32_t next = 0;
+  for (size_t k = 0; k < order.size(); ++k) {
+    if (k > 0 && pos[order[k]] != pos[order[k - 1]]) ++next;
+    id[order[k]] = next;
+  }
+  return order.empty() ? 0 : next + 1;
+}
+
+// One side of a triangle's edge: the undirected key (smaller id in the high half) and the
+// corner the edge leaves from (3t + k: from corner k to corner k + 1 of triangle t).
+struct HalfEdge {
+  uint64_t key;
+  uint32_t corner;
+  bool operator<(const HalfEdge& o) const { return key != o.key ? key < o.key : corner < o.corner; }
+};
+
+Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld) {
+  if (Status s = validate_surface_mesh(mesh, "mesh_topology"); !s.ok()) return s;
+  MeshTopology topo;
+  const size_t n = mesh.triangles.size();
+  topo.triangles = n;
+  std::vector<uvec3> tris(mesh.triangles);
+  size_t vertex_count = mesh.positions.size();
+  if (weld) {
+    std::vector<uint32_t> id;
+    vertex_count = weld_positions(mesh.positions, id);
+    tbb::parallel_for(size_t(0), n, [&](size_t t) {
+      for (int k = 0; k < 3; ++k) tris[t][k] = id[tris[t][k]];
+    });
+  }
+  topo.vertices = vertex_count;
+
+  // Per triangle: 0 sound, 1 zero area (still in the edge counts), 2 repeated index (left out).
+  std::vector<uint8_t> kind(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const uvec3 v = tris[t];
+      const uvec3 o = mesh.triangles[t];
+      if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0])
+        kind[t] = 2;
+      else
+        kind[t] = exact::collinear(mesh.positions[o[0]], mesh.positions[o[1]], mesh.positions[o[2]]) ? 1 : 0;
+    }
+  });
+
+  std::vector<uint8_t> used(vertex_count, 0);
+  std::vector<HalfEdge> edges(3 * n);
+  size_t valid = 0;
+  for (size_t t = 0; t < n; ++t) {
+    if (kind[t] != 0) ++topo.degenerate_triangles;
+    if (kind[t] == 2) continue;
+    ++valid;
+  }
+  // Half-edges of the triangles that have three distinct vertices, packed in triangle order;
+  // triangles with a repeated index get the key ~0 (sorted last, dropped).
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
+        const uint64_t key = kind[t] == 2 ? ~uint64_t(0) : (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+        edges[3 * t + k] = {key, uint32_t(3 * t + k)};
+      }
+  });
+  tbb::parallel_sort(edges.begin(), edges.end());
+  edges.resize(3 * valid);
+  for (size_t t = 0; t < n; ++t)
+    if (kind[t] != 2)
+      for (int k = 0; k < 3; ++k) used[tris[t][k]] = 1;
+  for (size_t v = 0; v < vertex_count; ++v) topo.unreferenced_vertices += used[v] ? 0 : 1;
+
+  auto start_vertex = [&](uint32_t corner) { return tris[corner / 3][corner % 3]; };
+  auto end_corner = [](uint32_t corner) { return corner - corner % 3 + (corner % 3 + 1) % 3; };
+  // The corner of a half-edge's triangle at vertex v (one of the edge's two ends).
+  auto corner_at = [&](uint32_t corner, uint32_t v) { return start_vertex(corner) == v ? corner : end_corner(corner); };
+  DisjointSets triangle_sets(n), corner_sets(3 * n);
+  for (size_t g = 0; g < edges.size();) {
+    size_t e = g + 1;
+    while (e < edges.size() && edges[e].key == edges[g].key) ++e;
+    const size_t count = e - g;
+    const uint32_t c0 = edges[g].corner;
+    if (count == 1) {
+      ++topo.boundary_edges;
+    } else {
+      if (count > 2)
+        ++topo.non_manifold_edges;
+      else if (start_vertex(c0) == start_vertex(edges[g + 1].corner))
+        ++topo.inconsistent_edges;
+      // The triangles on one edge are one component, and around each end of the edge their
+      // corners are one fan.
+      const uint32_t u = uint32_t(edges[g].key >> 32), w = uint32_t(edges[g].key);
+      for (size_t m = g + 1; m < e; ++m) {
+        const uint32_t cm = edges[m].corner;
+        triangle_sets.unite(c0 / 3, cm / 3);
+        corner_sets.unite(corner_at(c0, u), corner_at(cm, u));
+        corner_sets.unite(corner_at(c0, w), corner_at(cm, w));
+      }
+    }
+    g = e;
+  }
+  // A fan is a set of corners at one vertex (unions only join corners of the same vertex): a
+  // vertex with corners in two sets has two fans.
+  std::vector<uint8_t> fans(vertex_count, 0);
+  for (size_t t = 0; t < n; ++t) {
+    if (kind[t] == 2) continue;
+    if (triangle_sets.find(uint32_t(t)) == t) ++topo.components;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t c = uint32_t(3 * t + k);
+      if (corner_sets.find(c) == c) {
+        uint8_t& f = fans[tris[t][k]];
+        if (f < 2) ++f;
+      }
+    }
+  }
+  for (size_t v = 0; v < vertex_count; ++v) topo.non_manifold_vertices += fans[v] > 1 ? 1 : 0;
+  out = topo;
+  return Status::Ok();
+}
+
+inline bool boxes_overlap(const Aabb& a, const Aabb& b) {
+  return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y && a.lo.z <= b.hi.z &&
+         b.lo.z <= a.hi.z;
+}
+
+// The lanes of a node whose boxes overlap b, as bits (empty lanes have inverted boxes and fail):
+// all four without a branch, so that they are compared as one vector.
+inline unsigned overlapping_lanes(const WideNode& node, const Aabb& b) {
+  unsigned mask = 0;
+  for (int l = 0; l < kBvhWidth; ++l) {
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in &= (node.lo[a][l] <= b.hi[a]) & (b.lo[a] <= node.hi[a][l]);
+    mask |= unsigned(in) << l;
+  }
+  return mask;
+}
+
+Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
+  if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
+  const size_t n_all = mesh.triangles.size();
+  const std::vector<vec3>& pos = mesh.positions;
+  std::vector<uint8_t> keep(n_all);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n_all, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const uvec3 v = mesh.triangles[t];
+      keep[t] = !exact::collinear(pos[v[0]], pos[v[1]], pos[v[2]]);
+    }
+  });
+  std::vector<uint32_t> ids;
+  for (size_t t = 0; t < n_all; ++t)
+    if (keep[t]) ids.push_back(uint32_t(t));
+  const size_t n = ids.size();
+  std::vector<Aabb> bounds(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    for (int k = 0; k < 3; ++k) bounds[i].extend(pos[mesh.triangles[ids[i]][k]]);
+  });
+  WideBvh bvh;
+  if (Status s = build_wide_bvh(bounds, 4, bvh); !s.ok()) return s;
+  // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
+  std::vector<exact::Triangle> tri(n);
+  std::vector<Aabb> box(n);
+  std::vector<uint32_t> input(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    const uint32_t b = bvh.primitive_order[i];
+    input[i] = ids[b];
+    box[i] = bounds[b];
+    for (int k = 0; k < 3; ++k) tri[i][k] = pos[mesh.triangles[ids[b]][k]];
+  });
+
+  // Per node and lane, one past the last leaf-order primitive below it (leaves below a lane are
+  // one contiguous run): a query from primitive i looks only at later ones, so it skips lanes
+  // that end before it, most of the tree for most queries.
+  std::vector<std::array<uint32_t, kBvhWidth>> lane_end(bvh.nodes.size());
+  {
+    auto end_of = [&](auto&& self, uint32_t node) -> uint32_t {
+      uint32_t end = 0;
+      for (int l = 0; l < kBvhWidth; ++l) {
+        const WideNode& w = bvh.nodes[node];
+        uint32_t e = 0;
+        if (w.count[l] > 0)
+          e = w.child[l] + w.count[l];
+        else if (w.child[l] != kEmptyLane)
+          e = self(self, w.child[l]);
+        lane_end[node][l] = e;
+        end = std::max(end, e);
+      }
+      return end;
+    };
+    if (n > 0) end_of(end_of, 0);
+  }
+
+  tbb::combinable<uint64_t> counts([] { return uint64_t(0); });
+  tbb::enumerable_thread_specific<std::vector<glm::uvec2>> found;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+    uint64_t local = 0;
+    std::vector<glm::uvec2>* local_pairs = pairs ? &found.local() : nullptr;
+    uint32_t stack[kTraversalStackSize];
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Aabb& q = box[i];
+      int sp = 0;
+      stack[sp++] = 0;
+      while (sp > 0) {
+        const uint32_t index = stack[--sp];
+        const WideNode& node = bvh.nodes[index];
+        for (unsigned mask = overlapping_lanes(node, q); mask != 0; mask &= mask - 1) {
+          const int l = __builtin_ctz(mask);
+          if (lane_end[index][l] <= i + 1) continue;
+          if (node.count[l] == 0) {
+            stack[sp++] = node.child[l];
+            continue;
+          }
+          // Each unordered pair once: the later one in leaf order is tested from the earlier.
+          const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
+          for (size_t j = first; j < last; ++j) {
+            if (!boxes_overlap(q, box[j]) || !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j])) continue;
+            ++local;
+            if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
+          }
+        }
+      }
+    }
+    counts.local() += local;
+  });
+  count = counts.combine([](uint64_t a, uint64_t b) { return a + b; });
+  if (pairs) {
+    pairs->clear();
+    for (const auto& v : found) pairs->insert(pairs->end(), v.begin(), v.end());
+    std::sort(pairs->begin(), pairs->end(),
+              [](const glm::uvec2& a, const glm::uvec2& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+  }
+  return Status::Ok();
+}
+
+// Uniform doubles in [0, 1) from the generator's top 53 bits: the same sequence on every
+// platform (std::uniform_real_distribution's algorithm is the library's).
+inline double uniform01(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
+
+inline double angle_deg(const dvec3& a, const dvec3& b) {
+  // atan2 of |a × b| and a · b keeps small angles accurate, where acos(a · b) loses half the digits.
+  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)) * (180.0 / kPi);
+}
+
+// The output's unit normal at barycentrics (u, v) of its triangle t: the interpolated vertex
+// normal where the mesh has normals (and they do not cancel there), else the face normal.
+dvec3 output_normal(const SurfaceMesh& mesh, uint32_t t, double u, double v) {
+  const uvec3 tri = mesh.triangles[t];
+  if (!mesh.normals.empty()) {
+    const dvec3 n =
+        (1 - u - v) * dvec3(mesh.normals[tri[0]]) + u * dvec3(mesh.normals[tri[1]]) + v * dvec3(mesh.normals[tri[2]]);
+    const double len = glm::length(n);
+    if (len > 0 && std::isfinite(len)) return n / len;
+  }
+  const dvec3 p0(mesh.positions[tri[0]]);
+  const dvec3 n = glm::cross(dvec3(mesh.positions[tri[1]]) - p0, dvec3(mesh.positions[tri[2]]) - p0);
+  return n / glm::length(n);  // the tree holds no zero-area triangle
+}
+
+// Calls fn(leaf-order index) for every triangle of the tree whose box is within r of x.
+template <class Fn>
+void for_each_near(const TriangleTreeView& tree, const vec3& x, float r, Fn fn) {
+  if (tree.bvh.node_count == 0) return;
+  const float r2 = r * r;
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const WideNode& node = tree.bvh.nodes[stack[--sp]];
+    for (int l = 0; l < kBvhWidth; ++l) {
+      if (!(detail::box_distance2(node, l, x) <= r2)) continue;
+      if (node.count[l] == 0) {
+        stack[sp++] = node.child[l];
+        continue;
+      }
+      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) fn(i);
+    }
+  }
+}
+
+struct SurfacePoint {
+  vec3 position, normal;
+};
+
+Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mesh,
+                                   const SurfaceDistanceOptions& options, SurfaceDistances& out) {
+  if (Status s = validate_surface_mesh(mesh, "surface_distances"); !s.ok()) return s;
+  if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
+    return {StatusCode::kInvalidMesh, cat("surface_distances: ", mesh.normals.size(), " normals for ",
+                                          mesh.positions.size(), " vertices (one per vertex, or none)")};
+  if (!(options.trace_epsilon > 0.0f && options.trace_epsilon < 1.0f))
+    return {StatusCode::kInvalidArgument, "surface_distances: trace_epsilon must lie in (0, 1)"};
+  QueryRequest request;
+  request.fields = kFieldSignedDistance;
+  request.level = options.level;
+  const ModelView view = model.view();
+  if (Status s = validate_request(request, &view); !s.ok()) return s;
+  TraceOptions trace;
+  trace.level = options.level;
+  trace.epsilon = options.trace_epsilon;
+  if (Status s = validate_trace_options(trace); !s.ok()) return s;
+
+  SurfaceDistances result;
+  std::mt19937_64 rng(options.seed);
+
+  // Output -> S.
+  const std::vector<vec3>& pos = mesh.positions;
+  std::vector<vec3> samples;
+  {
+    std::vector<double> cumulative(mesh.triangles.size());
+    double total = 0;
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const uvec3 v = mesh.triangles[t];
+      const dvec3 p0(pos[v[0]]);
+      total += 0.5 * glm::length(glm::cross(dvec3(pos[v[1]]) - p0, dvec3(pos[v[2]]) - p0));
+      cumulative[t] = total;
+    }
+    if (total > 0) {
+      samples.reserve(options.output_samples);
+      for (uint32_t s = 0; s < options.output_samples; ++s) {
+        const double pick = uniform01(rng) * total;
+        const size_t t = std::min<size_t>(
+            std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(), cumulative.size() - 1);
+        // Uniform in the triangle: sqrt of one uniform folds the square onto it without bias.
+        const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
+        const uvec3 v = mesh.triangles[t];
+        const dvec3 p = (1 - r1) * dvec3(pos[v[0]]) + r1 * (1 - r2) * dvec3(pos[v[1]]) + r1 * r2 * dvec3(pos[v[2]]);
+        samples.push_back(vec3(p));
+      }
+    }
+    if (options.include_vertices) {
+      std::vector<uint8_t> used(pos.size(), 0);
+      for (const uvec3& v : mesh.triangles) used[v[0]] = used[v[1]] = used[v[2]] = 1;
+      for (size_t i = 0; i < pos.size(); ++i)
+        if (used[i]) samples.push_back(pos[i]);
+    }
+  }
+  std::vector<float> to_surface(samples.size());
+  {
+    // In batches: a PointResult is a few hundred bytes, a million of them would be most of the
+    // memory the rest of the report needs.
+    constexpr size_t kBatch = 1 << 16;
+    std::vector<PointResult> results;
+    for (size_t b = 0; b < samples.size(); b += kBatch) {
+      const size_t m = std::min(kBatch, samples.size() - b);
+      results.resize(m);
+      if (Status s = evaluate_points(model, std::span<const vec3>(samples).subspan(b, m), request, results); !s.ok())
+        return s;
+      for (size_t i = 0; i < m; ++i) to_surface[b + i] = std::fabs(results[i].sdf.distance);
+    }
+  }
+  result.output_samples = samples.size();
+  for (const float d : to_surface) {
+    result.mean_to_surface += d;
+    result.hausdorff_to_surface = std::max(result.hausdorff_to_surface, double(d));
+  }
+  if (!to_surface.empty()) result.mean_to_surface /= double(to_surface.size());
+
+  // Points of S: every hit along rays through the model's box.
+  const Aabb& bounds = model.bounds();
+  const dvec3 centre(bounds.centre());
+  const double half_diagonal = 0.5 * glm::length(dvec3(bounds.hi) - dvec3(bounds.lo));
+  const double radius = 1.5 * std::max(half_diagonal, 1e-30);
+  std::vector<Ray> rays(options.surface_rays);
+  for (Ray& ray : rays) {
+    const double z = 2 * uniform01(rng) - 1, phi = 2 * kPi * uniform01(rng), s = std::sqrt(std::max(0.0, 1 - z * z));
+    const dvec3 origin = centre + radius * dvec3(s * std::cos(phi), s * std::sin(phi), z);
+    dvec3 target;
+    for (int a = 0; a < 3; ++a) target[a] = bounds.lo[a] + uniform01(rng) * (double(bounds.hi[a]) - bounds.lo[a]);
+    ray.origin = vec3(origin);
+    ray.direction = vec3(target - origin);
+  }
+  const uint32_t max_hits = std::max<uint32_t>(1, options.max_hits_per_ray);
+  std::vector<std::vector<SurfacePoint>> ray_points(rays.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      std::vector<SurfacePoint>& found = ray_points[k];
+      // Every candidate is recorded and turned down, so the trace goes on to the next, until the
+      // cap (that one is accepted, ending the trace).
+      trace_surface(view, rays[k], trace, [&](const RayHit& h) {
+        found.push_back({h.position, h.normal});
+        return found.size() >= max_hits;
+      });
+    }
+  });
+  std::vector<SurfacePoint> surface_points;
+  for (const auto& v : ray_points) surface_points.insert(surface_points.end(), v.begin(), v.end());
+  ray_points = {};
+  result.surface_points = surface_points.size();
+
+  // S -> output, through a tree over the output's non-zero-area triangles.
+  Mesh output;
+  output.positions = mesh.positions;
+  output.triangles = mesh.triangles;
+  std::vector<uint32_t> selection;
+  Aabb output_box;
+  for (uint32_t t = 0; t < output.triangles.size(); ++t) {
+    const uvec3 v = output.triangles[t];
+    if (is_degenerate_triangle(pos[v[0]], pos[v[1]], pos[v[2]])) continue;
+    selection.push_back(t);
+    for (int k = 0; k < 3; ++k) output_box.extend(pos[v[k]]);
+  }
+  TriangleTree tree;
+  if (Status s = build_triangle_tree(output, selection, 4, tree, TreeMoments::kWithout); !s.ok()) return s;
+  const TriangleTreeView tview = tree.view();
+  // Triangles this much nearer or farther than the nearest are equally near to float round-off.
+  const double tie = selection.empty() ? 0.0 : 1e-6 * glm::length(dvec3(output_box.hi) - dvec3(output_box.lo));
+  std::vector<double> from_surface(surface_points.size()), deviation(surface_points.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const vec3 x = surface_points[k].position;
+      const NearestPrimitive nearest = unsigned_distance(tview, x);
+      if (!(nearest.distance < kInfinity)) {
+        from_surface[k] = std::numeric_limits<double>::infinity();
+        deviation[k] = -1;  // no output: no normal to compare
+        continue;
+      }
+      // In double: the nearest distance over the triangles near enough to matter, then among
+      // those as near to round-off the normal that agrees best with S's.
+      const dvec3 xd(x);
+      auto closest = [&](uint32_t i) {
+        return closest_point_on_triangle(dvec3(tview.vertices[3 * i]), dvec3(tview.vertices[3 * i + 1]),
+                                         dvec3(tview.vertices[3 * i + 2]), xd);
+      };
+      const float reach = float(nearest.distance + 2 * tie);
+      double best = std::numeric_limits<double>::infinity();
+      for_each_near(tview, x, reach, [&](uint32_t i) { best = std::min(best, glm::length(closest(i).point - xd)); });
+      if (!(best < std::numeric_limits<double>::infinity())) best = nearest.distance;  // unreachable
+      const dvec3 ns(surface_points[k].normal);
+      double angle = std::numeric_limits<double>::infinity();
+      for_each_near(tview, x, reach, [&](uint32_t i) {
+        const ClosestPoint<double> c = closest(i);
+        if (glm::length(c.point - xd) <= best + tie)
+          angle = std::min(angle, angle_deg(ns, output_normal(mesh, tview.triangle_ids[i], c.u, c.v)));
+      });
+      if (!(angle < std::numeric_limits<double>::infinity()))
+        angle = angle_deg(ns, output_normal(mesh, nearest.primitive, nearest.u, nearest.v));
+      from_surface[k] = best;
+      deviation[k] = angle;
+    }
+  });
+  uint64_t normals = 0;
+  for (size_t k = 0; k < surface_points.size(); ++k) {
+    result.mean_from_surface += from_surface[k];
+    result.hausdorff_from_surface = std::max(result.hausdorff_from_surface, from_surface[k]);
+    if (deviation[k] >= 0) {
+      result.normal_deviation_mean_deg += deviation[k];
+      result.normal_deviation_max_deg = std::max(result.normal_deviation_max_deg, deviation[k]);
+      ++normals;
+    }
+  }
+  if (!surface_points.empty()) result.mean_from_surface /= double(surface_points.size());
+  if (normals > 0) result.normal_deviation_mean_deg /= double(normals);
+  result.chamfer = 0.5 * (result.mean_to_surface + result.mean_from_surface);
+  out = result;
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status mesh_topology(const SurfaceMesh& mesh, MeshTopology& out, bool weld_equal_positions) {
+  return guard_status("mesh_topology", [&] { return mesh_topology_unguarded(mesh, out, weld_equal_positions); });
+}
+
+Status count_self_intersections(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
+  return guard_status("count_self_intersections",
+                      [&] { return count_self_intersections_unguarded(mesh, count, pairs); });
+}
+
+Status surface_distances(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
+                         SurfaceDistances& out) {
+  return guard_status("surface_distances", [&] { return surface_distances_unguarded(model, mesh, options, out); });
+}
+
+Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
+                           MeshQualityReport& out, bool weld_equal_positions) {
+  out = MeshQualityReport{};
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = mesh_topology(mesh, out.topology, weld_equal_positions); !s.ok()) return s;
+  if (Status s = count_self_intersections(mesh, out.self_intersections); !s.ok()) return s;
+  if (Status s = surface_distances(model, mesh, options, out.distances); !s.ok()) return s;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return Status::Ok();
+}
+
+}  // namespace gwnrt
