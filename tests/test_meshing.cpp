@@ -86,6 +86,44 @@ TEST(MeshingCell, ComponentsMatchFloodFillForAll256Patterns) {
   }
 }
 
+// Whether some face of the cell holds both edges.
+bool share_a_face(int a, int b) {
+  for (int face = 0; face < 6; ++face) {
+    const CellFace f = cell_face(face);
+    bool has_a = false, has_b = false;
+    for (int k = 0; k < 4; ++k) {
+      has_a |= f.edge[k] == a;
+      has_b |= f.edge[k] == b;
+    }
+    if (has_a && has_b) return true;
+  }
+  return false;
+}
+
+TEST(MeshingCell, LoopsAreTheComponentsInOrder) {
+  for (uint32_t mask = 0; mask < 256; ++mask) {
+    const CellComponents parts = cell_components(mask);
+    const CellLoops loops = cell_loops(mask);
+    ASSERT_EQ(loops.count, parts.count) << "pattern " << mask;
+    int first = 0, seen = 0;
+    for (int l = 0; l < loops.count; ++l) {
+      const int n = loops.length[l];
+      ASSERT_GE(n, 3) << "pattern " << mask;
+      const int component = parts.of_edge[loops.edge[first]];
+      for (int k = 0; k < n; ++k) {
+        const int e = loops.edge[first + k], next = loops.edge[first + (k + 1) % n];
+        EXPECT_EQ(parts.of_edge[e], component) << "pattern " << mask << ": a loop crosses components";
+        EXPECT_TRUE(share_a_face(e, next)) << "pattern " << mask << ": consecutive edges " << e << ", " << next;
+      }
+      first += n;
+      seen += n;
+    }
+    int crossed = 0;
+    for (int e = 0; e < kCellEdges; ++e) crossed += parts.of_edge[e] >= 0;
+    EXPECT_EQ(seen, crossed) << "pattern " << mask;
+  }
+}
+
 TEST(MeshingCell, EdgeNumberingIsConsistent) {
   for (int e = 0; e < kCellEdges; ++e) {
     const int c = edge_corner(e);
@@ -165,6 +203,34 @@ TEST(MeshingQef, EigenDecompositionReconstructsTheMatrix) {
       const dvec3 av = a.apply(v[i]);
       EXPECT_NEAR(glm::length(av - lambda[i] * v[i]), 0.0, 1e-10);
       EXPECT_NEAR(glm::length(v[i]), 1.0, 1e-12);
+    }
+  }
+}
+
+// The corner pass's shared ray: every point of a line gets the w that winding_number_crossing
+// gives it alone (which tests/test_crossing_winding.cpp checks against the brute force).
+TEST(MeshingCorners, WindingAlongAnAxisIsEachPointsOwn) {
+  for (const char* name : {"bunny_holes.obj", "bunny.obj", "teapot.obj"}) {
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView view = model.view();
+    test::Random random(11);
+    const Aabb box = model.bounds();
+    for (int line = 0; line < 300; ++line) {
+      const int axis = random.index(3);
+      const float sign = random.index(2) ? 1.0f : -1.0f;
+      const float step = 0.02f * glm::length(box.hi - box.lo);
+      vec3 points[8];
+      points[0] = random.in_box(box);
+      for (int k = 1; k < 8; ++k) {
+        points[k] = points[0];
+        points[k][axis] += sign * step * float(k);
+      }
+      float w[8];
+      winding_numbers_along_axis(view, points, axis, sign, w);
+      for (int k = 0; k < 8; ++k) {
+        const float alone = winding_number_crossing<false, false>(view, points[k]).w;
+        EXPECT_NEAR(w[k], alone, 2e-6f) << name << " line " << line;
+      }
     }
   }
 }
@@ -315,6 +381,37 @@ TEST(Meshing, CubeCornersAndEdgesAreSharp) {
       EXPECT_GE(within, 0.8 * on_edge) << "cube edge " << a << "-" << b;
       EXPECT_LT(worst, 0.3 * h) << "cube edge " << a << "-" << b;
     }
+}
+
+TEST(Meshing, MarchingCubesIsClosedOnSAndCoarserThanDualContouring) {
+  // The turned cube: marching cubes cuts its edges and corners (its vertices are the edges'
+  // points of S, exact here), dual contouring keeps them, so DC's Chamfer distance to S is lower.
+  const glm::dmat3 r = glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.4, glm::normalize(glm::dvec3(1, 2, 3))));
+  const Mesh cube = transformed(test::make_cube(), r, dvec3(0.0123, 0.0456, 0.0789));
+  const GwnModel model = test::build_model(cube);
+  MeshingOptions o = options_at(24);
+  SurfaceMesh dc, mc;
+  MeshingStats stats;
+  ASSERT_TRUE(extract_surface(model, o, dc).ok());
+  o.method = MeshingMethod::kMarchingCubes;
+  ASSERT_TRUE(extract_surface(model, o, mc, &stats).ok());
+  expect_closed_oriented(mc, "marching cubes, cube");
+  expect_no_self_intersections(mc, "marching cubes, cube");
+  for (const vec3& p : mc.positions) EXPECT_LT(reference::mesh_distance(cube, dvec3(p)), 1e-5 * stats.cell_size);
+  SurfaceDistanceOptions d;
+  d.output_samples = 20000;
+  d.surface_rays = 20000;
+  SurfaceDistances dc_d, mc_d;
+  ASSERT_TRUE(surface_distances(model, dc, d, dc_d).ok());
+  ASSERT_TRUE(surface_distances(model, mc, d, mc_d).ok());
+  EXPECT_LT(dc_d.chamfer, mc_d.chamfer);
+  EXPECT_LT(dc_d.hausdorff_from_surface, mc_d.hausdorff_from_surface);
+  // On bunny_holes too: closed, manifold, intersection-free.
+  const GwnModel holes = test::build_model(test::load_test_mesh("bunny_holes.obj"));
+  SurfaceMesh out;
+  ASSERT_TRUE(extract_surface(holes, o, out).ok());
+  expect_closed_oriented(out, "marching cubes, bunny_holes");
+  expect_no_self_intersections(out, "marching cubes, bunny_holes");
 }
 
 // A hemisphere of latitude rings whose rim lies in the plane z = z0: on the rim's disk w = 1/2

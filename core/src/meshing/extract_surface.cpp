@@ -24,8 +24,8 @@ Status validate_options(const MeshingOptions& o) {
             "meshing: level 0 gives no bounded surface (w tends to 0 far from the mesh, on either side)"};
   if (!(o.smooth_angle >= 0.0f && o.smooth_angle <= 180.0f))
     return {StatusCode::kInvalidArgument, "meshing: the smoothing angle must lie in [0, 180] degrees"};
-  if (o.method != MeshingMethod::kDualContouring)
-    return {StatusCode::kUnavailable, "meshing: marching cubes is not available yet (use dual contouring)"};
+  if (o.method != MeshingMethod::kDualContouring && o.method != MeshingMethod::kMarchingCubes)
+    return {StatusCode::kInvalidArgument, "meshing: the method must be dual contouring or marching cubes"};
   if (uint32_t(o.winding.method) >= kWindingMethodCount)
     return {StatusCode::kInvalidArgument, "meshing: unknown winding method"};
   if (o.winding.taylor.order < 0 || o.winding.taylor.order > 2 || !(o.winding.taylor.beta > 0.0f) ||

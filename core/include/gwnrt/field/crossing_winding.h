@@ -304,21 +304,22 @@ GWNRT_HD inline WindingSample winding_number_crossing(const ModelView& m, const 
                        : winding_number_crossing<false, false>(m, x, kConeBeta, stats);
 }
 
-// w at Count points along one line parallel to axis `axis`, in ascending order along it (grid
-// corners: meshing/), each exactly as winding_number_crossing gives it but with M's crossings
-// found once: the ray from the first point along +axis meets, at t >= the offset of point k,
-// every crossing ahead of point k. The cone is traversed per point (its field differs), along
-// the same direction. A point exactly on C takes winding_number_crossing's nudged evaluation.
+// w at Count points along one line parallel to axis `axis`, in ascending order along the
+// direction sign · e_axis (grid corners: meshing/), each exactly as winding_number_crossing gives
+// it but with M's crossings found once: the ray from the first point along that direction meets,
+// at t >= the offset of point k, every crossing ahead of point k. The cone is traversed per point
+// (its field differs), along the same direction. A point exactly on C takes
+// winding_number_crossing's nudged evaluation.
 template <int Count>
-GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis,
+GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis, float sign,
                                          float (&out)[Count]) {
   vec3 direction(0.0f);
-  direction[axis] = 1.0f;
+  direction[axis] = sign;
   const RayFrame line = make_ray_frame(points[0], direction);
   float offset[Count];
   int mesh_jumps[Count];
   for (int k = 0; k < Count; ++k) {
-    offset[k] = points[k][axis] - points[0][axis];
+    offset[k] = (points[k][axis] - points[0][axis]) * sign;
     mesh_jumps[k] = 0;
   }
   visit_axis_crossings(m.triangles.bvh, m.triangles.vertices, line, 0.0f, [&](uint32_t, float t, int jump) {

@@ -143,4 +143,101 @@ GWNRT_HD inline uint32_t packed_cell_components(uint32_t inside) {
 #endif
 }
 
+// The same components as closed loops of edges in order, for marching cubes (one polygon per
+// component, its corners on the loop's edges). Each loop runs counter-clockwise seen from
+// outside {w > w*}: its polygon's normal (Newell's, over the edges' midpoints) points from the
+// component's inside corners toward its outside ones.
+struct CellLoops {
+  int count = 0;
+  int length[4]{};
+  int8_t edge[kCellEdges]{};  // loop 0's edges, then loop 1's, ...
+};
+
+GWNRT_HD constexpr CellLoops cell_loops(uint32_t inside) {
+  // Each crossed edge's two neighbours along the patch: its partners on its two faces.
+  int8_t next[kCellEdges][2]{};
+  int8_t degree[kCellEdges]{};
+  const auto link = [&](int a, int b) {
+    next[a][degree[a]++] = int8_t(b);
+    next[b][degree[b]++] = int8_t(a);
+  };
+  const auto crossed = [&](int e) {
+    const int c = edge_corner(e);
+    return ((inside >> c) & 1u) != ((inside >> (c | (1 << edge_axis(e)))) & 1u);
+  };
+  for (int face = 0; face < 6; ++face) {
+    const CellFace f = cell_face(face);
+    int on[4]{}, n = 0;
+    for (int k = 0; k < 4; ++k)
+      if (crossed(f.edge[k])) on[n++] = k;
+    if (n == 2) {
+      link(f.edge[on[0]], f.edge[on[1]]);
+    } else if (n == 4) {  // the rule of cell_components
+      if ((inside >> f.corner[0]) & 1u) {
+        link(f.edge[3], f.edge[0]);
+        link(f.edge[1], f.edge[2]);
+      } else {
+        link(f.edge[0], f.edge[1]);
+        link(f.edge[2], f.edge[3]);
+      }
+    }
+  }
+  CellLoops out;
+  bool used[kCellEdges]{};
+  int written = 0;
+  for (int start = 0; start < kCellEdges; ++start) {
+    if (!crossed(start) || used[start]) continue;
+    const int first = written;
+    int previous = -1, e = start;
+    for (int guard = 0; guard < kCellEdges && !used[e]; ++guard) {
+      used[e] = true;
+      out.edge[written++] = int8_t(e);
+      const int a = next[e][0], b = next[e][1];
+      const int step = a != previous ? a : b;
+      previous = e;
+      e = step;
+    }
+    const int length = written - first;
+    // Orientation: Newell's normal of the edges' midpoints against inside -> outside.
+    double nx = 0, ny = 0, nz = 0, gx = 0, gy = 0, gz = 0;
+    for (int k = 0; k < length; ++k) {
+      const int e0 = out.edge[first + k], e1 = out.edge[first + (k + 1) % length];
+      double p[3] = {}, q[3] = {};
+      for (int a = 0; a < 3; ++a) {
+        p[a] = a == edge_axis(e0) ? 0.5 : double((edge_corner(e0) >> a) & 1);
+        q[a] = a == edge_axis(e1) ? 0.5 : double((edge_corner(e1) >> a) & 1);
+      }
+      nx += (p[1] - q[1]) * (p[2] + q[2]);
+      ny += (p[2] - q[2]) * (p[0] + q[0]);
+      nz += (p[0] - q[0]) * (p[1] + q[1]);
+      const double sign = ((inside >> edge_corner(e0)) & 1u) ? 1.0 : -1.0;  // inside -> outside along the edge
+      (edge_axis(e0) == 0 ? gx : (edge_axis(e0) == 1 ? gy : gz)) += sign;
+    }
+    if (nx * gx + ny * gy + nz * gz < 0)
+      for (int i = first, j = written - 1; i < j; ++i, --j) {
+        const int8_t t = out.edge[i];
+        out.edge[i] = out.edge[j];
+        out.edge[j] = t;
+      }
+    out.length[out.count++] = length;
+  }
+  return out;
+}
+
+#if !defined(__CUDACC__)
+inline constexpr std::array<CellLoops, 256> kCellLoops = [] {
+  std::array<CellLoops, 256> table{};
+  for (uint32_t mask = 0; mask < 256; ++mask) table[mask] = cell_loops(mask);
+  return table;
+}();
+#endif
+
+GWNRT_HD inline CellLoops cell_loops_of(uint32_t inside) {
+#if defined(__CUDACC__)
+  return cell_loops(inside);
+#else
+  return kCellLoops[inside];
+#endif
+}
+
 }  // namespace gwnrt

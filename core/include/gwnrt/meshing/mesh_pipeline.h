@@ -41,6 +41,57 @@ class PassClock {
 
 }  // namespace detail
 
+// Marching cubes after the shared passes (corners, edges, Hermite data): the edges' points are
+// the vertices, each cell's loops its polygons.
+template <class Backend, class Array, class Reserve>
+Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t edge_total, const Array& hermite,
+                          Reserve& reserve, detail::PassClock& clock, SurfaceMesh& out, MeshingStats& stats) {
+  using U32 = typename Backend::template Array<uint32_t>;
+  const uint64_t items = stats.evaluated_blocks * kBlockItems;
+  U32 count, offset;
+  count.resize(items);
+  offset.resize(items);
+  backend.parallel_for(items, MarchingCountPass{view, count.data()});
+  const uint64_t face_total = backend.exclusive_scan(count.data(), items, offset.data());
+  if (Status s = reserve(face_total * 2 * sizeof(uvec3), "the triangles"); !s.ok()) return s;
+  typename Backend::template Array<uvec3> triangles;
+  triangles.resize(face_total);
+  backend.parallel_for(items, MarchingFacePass{view, count.data(), offset.data(), triangles.data()});
+  stats.seconds.faces = clock.lap();
+  out.positions.resize(edge_total);
+  out.normals.resize(edge_total);
+  {
+    const HermitePoint* h = hermite.data();
+    vec3 *p = out.positions.data(), *n = out.normals.data();
+    backend.parallel_for(edge_total, [=](uint64_t i) {
+      p[i] = h[i].point;
+      n[i] = h[i].normal;
+    });
+  }
+  // Faces with an edge not listed (a cell missing: a failed bound) are dropped, as in DC.
+  U32 keep, keep_offset;
+  keep.resize(face_total);
+  keep_offset.resize(face_total);
+  {
+    const uvec3* t = triangles.data();
+    uint32_t* k = keep.data();
+    backend.parallel_for(face_total, [=](uint64_t i) { k[i] = t[i].x != kEmptyLane; });
+  }
+  const uint64_t kept = backend.exclusive_scan(keep.data(), face_total, keep_offset.data());
+  stats.open_edges = face_total - kept;
+  out.triangles.resize(kept);
+  {
+    const uvec3* t = triangles.data();
+    const uint32_t *k = keep.data(), *o = keep_offset.data();
+    uvec3* dst = out.triangles.data();
+    backend.parallel_for(face_total, [=](uint64_t i) {
+      if (k[i]) dst[o[i]] = t[i];
+    });
+  }
+  stats.seconds.output = clock.lap();
+  return Status::Ok();
+}
+
 // Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
 // which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats.
 template <class Backend>
@@ -222,12 +273,19 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
     return Status::Ok();
   }
 
+  if (options.method == MeshingMethod::kMarchingCubes)
+    return run_marching_cubes(backend, view, edge_total, hermite, reserve, clock, out, stats);
+
   // 5. Cells: one vertex per component.
   U32 cell_parts, cell_count, cell_offset;
-  cell_parts.resize(slots * kBlockItems);
+  cell_parts.resize(slots * kBlockItems);  // zeroed
   cell_count.resize(slots * kBlockItems);
   cell_offset.resize(slots * kBlockItems);
-  backend.parallel_for(slots * kBlockItems, CellCountPass{view, cell_parts.data(), cell_count.data()});
+  backend.parallel_for(edge_total, CellMarkPass{view, edges.data(), cell_parts.data()});
+  typename Backend::template Array<unsigned long long> multi;
+  multi.resize(1);
+  backend.parallel_for(slots * kBlockItems, CellCountPass{view, cell_parts.data(), cell_count.data(), multi.data()});
+  stats.multi_component_cells = backend.to_host(multi, 0);
   view.cell_parts = cell_parts.data();
   const uint64_t vertex_total = backend.exclusive_scan(cell_count.data(), cell_count.size(), cell_offset.data());
   if (Status s = reserve(vertex_total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
@@ -240,7 +298,6 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   vertex_cell.resize(vertex_total);
   backend.parallel_for(slots * kBlockItems,
                        CellVertexPass{view, hermite.data(), positions.data(), normals.data(), vertex_cell.data()});
-  for (uint64_t i = 0; i < cell_count.size(); ++i) stats.multi_component_cells += backend.to_host(cell_count, i) > 1;
   stats.seconds.vertices = clock.lap();
 
   // 6. Faces: two triangles per crossing edge; edges missing a cell are dropped.
