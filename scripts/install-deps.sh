@@ -1,9 +1,15 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages gwnrt builds against (skips apt when all are present).
+# --baselines adds what gwnrt-bench-mesh's OpenVDB column needs (OpenVDB, and Boost for its
+# headers): a benchmark's baseline only, left out of CI, where compiling OpenVDB's mesher into
+# each build configuration would cost minutes.
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
           libtbb-dev libglm-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
-          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev libopenvdb-dev)
+          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev)
+if [ "${1:-}" = "--baselines" ]; then
+  packages+=(libopenvdb-dev libboost-dev libboost-iostreams-dev)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
