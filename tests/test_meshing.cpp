@@ -235,6 +235,39 @@ TEST(MeshingCorners, WindingAlongAnAxisIsEachPointsOwn) {
   }
 }
 
+// The corner pass's screened values: the same side of the level as the exact w, whatever the
+// level, also levels within a hair of w itself.
+TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj"}) {
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView view = model.view();
+    test::Random random(5);
+    const Aabb box = model.bounds();
+    int screened = 0;
+    for (int line = 0; line < 300; ++line) {
+      const int axis = random.index(3);
+      const float sign = random.index(2) ? 1.0f : -1.0f;
+      vec3 points[8];
+      points[0] = random.in_box(box);
+      for (int k = 1; k < 8; ++k) {
+        points[k] = points[0];
+        points[k][axis] += sign * 0.01f * glm::length(box.hi - box.lo) * float(k);
+      }
+      float exact[8];
+      for (int k = 0; k < 8; ++k) exact[k] = winding_number_crossing<false, false>(view, points[k]).w;
+      for (const float level : {0.5f, exact[3] + 1e-4f, exact[5] - 1e-3f, exact[0] + 0.015f}) {
+        float w[8];
+        corner_winding_values(view, points, axis, sign, level, w);
+        for (int k = 0; k < 8; ++k) {
+          EXPECT_EQ(w[k] > level, exact[k] > level) << name << " line " << line << " level " << level;
+          screened += w[k] != exact[k];
+        }
+      }
+    }
+    EXPECT_GT(screened, 1000) << name << ": the screen was never used";
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Whole meshes.
 

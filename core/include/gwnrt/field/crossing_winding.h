@@ -308,11 +308,11 @@ GWNRT_HD inline WindingSample winding_number_crossing(const ModelView& m, const 
 // direction sign · e_axis (grid corners: meshing/), each exactly as winding_number_crossing gives
 // it but with M's crossings found once: the ray from the first point along that direction meets,
 // at t >= the offset of point k, every crossing ahead of point k. The cone is traversed per point
-// (its field differs), along the same direction. A point exactly on C takes
-// winding_number_crossing's nudged evaluation.
+// (its field differs), along the same direction, its clusters expanded beyond cone_beta radii. A
+// point exactly on C takes winding_number_crossing's nudged evaluation.
 template <int Count>
 GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis, float sign,
-                                         float (&out)[Count]) {
+                                         float (&out)[Count], float cone_beta = kConeBeta) {
   vec3 direction(0.0f);
   direction[axis] = sign;
   const RayFrame line = make_ray_frame(points[0], direction);
@@ -327,7 +327,7 @@ GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points
   });
   for (int k = 0; k < Count; ++k) {
     const RayFrame frame = make_ray_frame(points[k], direction);
-    typename detail::ConeCrossingVisitor<false, false>::type cone(m.cone, frame, points[k], kConeBeta, nullptr);
+    typename detail::ConeCrossingVisitor<false, false>::type cone(m.cone, frame, points[k], cone_beta, nullptr);
     cone.traverse();
     out[k] = cone.on_cone ? winding_number_crossing<false, false>(m, points[k]).w
                           : detail::crossing_winding(cone, mesh_jumps[k]);

@@ -58,34 +58,25 @@ GWNRT_HD constexpr CellFace cell_face(int face) {
   return f;
 }
 
-// On each face the patch crosses two or four of its edges. Two are joined by one segment. Four
-// (diagonal corners alike: the ambiguous face) are joined so that each inside corner is cut off
-// by its own segment, the two inside corners of the face apart: a rule that reads only the
-// face's four signs, so the two cells sharing the face join its crossings the same way and the
-// patches meet edge to edge (watertight). Every sign-changing edge lies on two faces, so the
-// segments close into loops; a loop is a component.
-GWNRT_HD constexpr CellComponents cell_components(uint32_t inside) {
-  CellComponents out;
-  int8_t parent[kCellEdges]{};
-  for (int e = 0; e < kCellEdges; ++e) {
-    const int c = edge_corner(e);
-    const bool changes = ((inside >> c) & 1u) != ((inside >> (c | (1 << edge_axis(e)))) & 1u);
-    parent[e] = int8_t(changes ? e : -1);
-  }
-  const auto find = [&](int e) {
-    while (parent[e] != e) e = parent[e];
-    return e;
-  };
-  const auto join = [&](int a, int b) {
-    const int ra = find(a), rb = find(b);
-    if (ra < rb) parent[rb] = int8_t(ra);
-    if (rb < ra) parent[ra] = int8_t(rb);
-  };
+// Whether edge e of the cell has a sign change.
+GWNRT_HD constexpr bool edge_crossed(uint32_t inside, int e) {
+  const int c = edge_corner(e);
+  return ((inside >> c) & 1u) != ((inside >> (c | (1 << edge_axis(e)))) & 1u);
+}
+
+// The patch's segments on the cell's faces, as join(edge a, edge b). On each face the patch
+// crosses two or four of its edges. Two are joined by one segment. Four (diagonal corners alike:
+// the ambiguous face) are joined so that each inside corner is cut off by its own segment, the
+// two inside corners of the face apart: a rule that reads only the face's four signs, so the two
+// cells sharing the face join its crossings the same way and the patches meet edge to edge
+// (watertight). Every sign-changing edge lies on two faces, so the segments close into loops.
+template <class Join>
+GWNRT_HD constexpr void visit_face_segments(uint32_t inside, Join&& join) {
   for (int face = 0; face < 6; ++face) {
     const CellFace f = cell_face(face);
     int crossed[4]{}, n = 0;
     for (int k = 0; k < 4; ++k)
-      if (parent[f.edge[k]] >= 0) crossed[n++] = k;
+      if (edge_crossed(inside, f.edge[k])) crossed[n++] = k;
     if (n == 2) {
       join(f.edge[crossed[0]], f.edge[crossed[1]]);
     } else if (n == 4) {
@@ -99,6 +90,22 @@ GWNRT_HD constexpr CellComponents cell_components(uint32_t inside) {
       }
     }
   }
+}
+
+// The components: a loop of segments is a component.
+GWNRT_HD constexpr CellComponents cell_components(uint32_t inside) {
+  CellComponents out;
+  int8_t parent[kCellEdges]{};
+  for (int e = 0; e < kCellEdges; ++e) parent[e] = int8_t(edge_crossed(inside, e) ? e : -1);
+  const auto find = [&](int e) {
+    while (parent[e] != e) e = parent[e];
+    return e;
+  };
+  visit_face_segments(inside, [&](int a, int b) {
+    const int ra = find(a), rb = find(b);
+    if (ra < rb) parent[rb] = int8_t(ra);
+    if (rb < ra) parent[ra] = int8_t(rb);
+  });
   int8_t label[kCellEdges]{};
   for (int e = 0; e < kCellEdges; ++e) {
     label[e] = -1;
@@ -157,36 +164,15 @@ GWNRT_HD constexpr CellLoops cell_loops(uint32_t inside) {
   // Each crossed edge's two neighbours along the patch: its partners on its two faces.
   int8_t next[kCellEdges][2]{};
   int8_t degree[kCellEdges]{};
-  const auto link = [&](int a, int b) {
+  visit_face_segments(inside, [&](int a, int b) {
     next[a][degree[a]++] = int8_t(b);
     next[b][degree[b]++] = int8_t(a);
-  };
-  const auto crossed = [&](int e) {
-    const int c = edge_corner(e);
-    return ((inside >> c) & 1u) != ((inside >> (c | (1 << edge_axis(e)))) & 1u);
-  };
-  for (int face = 0; face < 6; ++face) {
-    const CellFace f = cell_face(face);
-    int on[4]{}, n = 0;
-    for (int k = 0; k < 4; ++k)
-      if (crossed(f.edge[k])) on[n++] = k;
-    if (n == 2) {
-      link(f.edge[on[0]], f.edge[on[1]]);
-    } else if (n == 4) {  // the rule of cell_components
-      if ((inside >> f.corner[0]) & 1u) {
-        link(f.edge[3], f.edge[0]);
-        link(f.edge[1], f.edge[2]);
-      } else {
-        link(f.edge[0], f.edge[1]);
-        link(f.edge[2], f.edge[3]);
-      }
-    }
-  }
+  });
   CellLoops out;
   bool used[kCellEdges]{};
   int written = 0;
   for (int start = 0; start < kCellEdges; ++start) {
-    if (!crossed(start) || used[start]) continue;
+    if (!edge_crossed(inside, start) || used[start]) continue;
     const int first = written;
     int previous = -1, e = start;
     for (int guard = 0; guard < kCellEdges && !used[e]; ++guard) {
