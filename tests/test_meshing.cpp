@@ -447,33 +447,12 @@ TEST(Meshing, MarchingCubesIsClosedOnSAndCoarserThanDualContouring) {
   expect_no_self_intersections(out, "marching cubes, bunny_holes");
 }
 
-// A hemisphere of latitude rings whose rim lies in the plane z = z0: on the rim's disk w = 1/2
-// exactly (the shell covers half the directions), so S's cap is that disk.
-Mesh make_hemisphere(int rings, int segments, double z0) {
-  Mesh m;
-  m.positions.push_back(vec3(0, 0, float(1 + z0)));
-  for (int i = 1; i <= rings; ++i) {
-    const double theta = 0.5 * kPi * i / rings;
-    for (int j = 0; j < segments; ++j) {
-      const double phi = 2 * kPi * j / segments;
-      const double z = i == rings ? 0.0 : std::cos(theta);
-      m.positions.push_back(
-          vec3(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(z + z0)));
-    }
-  }
-  const auto at = [&](int ring, int j) { return uint32_t(1 + (ring - 1) * segments + (j % segments)); };
-  for (int j = 0; j < segments; ++j) m.triangles.push_back({0u, at(1, j), at(1, j + 1)});
-  for (int i = 1; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
-  return m;
-}
-
 TEST(Meshing, OpenHemisphereIsClosedByItsFlatCap) {
   const double z0 = 0.0137;
-  const GwnModel model = test::build_model(make_hemisphere(24, 64, z0));
+  // test::make_hemisphere's rim lies in z = 0: on its disk w = 1/2 exactly (the shell covers half
+  // the directions), so S's cap is that disk, here moved to z = z0 off the grid's planes.
+  const GwnModel model =
+      test::build_model(transformed(test::make_hemisphere(24, 64), glm::dmat3(1.0), dvec3(0, 0, z0)));
   SurfaceMesh out;
   MeshingStats stats;
   ASSERT_TRUE(extract_surface(model, options_at(48), out, &stats).ok());

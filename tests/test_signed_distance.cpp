@@ -33,29 +33,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // Shapes and references.
 // ---------------------------------------------------------------------------------------------
 
-// The upper half (z >= 0) of the unit sphere, outward normals: a fan around the pole (0,0,1) and
-// `rings` - 1 bands of quads down to the rim, a regular `segments`-gon at exactly z = 0 (so the
-// mirror image of the cap closes it: see HemisphereReference). All vertices lie on the sphere.
-Mesh make_hemisphere(int rings, int segments) {
-  Mesh m;
-  m.positions.push_back({0.0f, 0.0f, 1.0f});
-  for (int i = 1; i <= rings; ++i) {
-    const double theta = 0.5 * kPi * i / rings;
-    const double r = i == rings ? 1.0 : std::sin(theta), z = i == rings ? 0.0 : std::cos(theta);
-    for (int j = 0; j < segments; ++j) {
-      const double phi = 2.0 * kPi * j / segments;
-      m.positions.push_back({float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)});
-    }
-  }
-  auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j % segments)); };
-  for (int j = 0; j < segments; ++j) m.triangles.push_back({0u, ring(1, j), ring(1, j + 1)});
-  for (int i = 1; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-      m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-    }
-  return m;
-}
+using test::make_hemisphere;
 
 dvec3 unit_normal(const Mesh& m, size_t t) {
   const dvec3 a(m.positions[m.triangles[t][0]]), b(m.positions[m.triangles[t][1]]), c(m.positions[m.triangles[t][2]]);

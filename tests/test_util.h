@@ -99,6 +99,30 @@ inline Mesh make_sphere(int levels, float radius = 1.0f) {
   return m;
 }
 
+// The upper half (z >= 0) of the unit sphere, outward normals: a fan around the pole (0,0,1) and
+// `rings` - 1 bands of quads down to the rim, a regular `segments`-gon at exactly z = 0 (so the
+// mirror image of the cap closes it: test_signed_distance.cpp's HemisphereReference). All vertices lie on the sphere.
+inline Mesh make_hemisphere(int rings, int segments) {
+  Mesh m;
+  m.positions.push_back({0.0f, 0.0f, 1.0f});
+  for (int i = 1; i <= rings; ++i) {
+    const double theta = 0.5 * kPi * i / rings;
+    const double r = i == rings ? 1.0 : std::sin(theta), z = i == rings ? 0.0 : std::cos(theta);
+    for (int j = 0; j < segments; ++j) {
+      const double phi = 2.0 * kPi * j / segments;
+      m.positions.push_back({float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)});
+    }
+  }
+  auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j % segments)); };
+  for (int j = 0; j < segments; ++j) m.triangles.push_back({0u, ring(1, j), ring(1, j + 1)});
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+      m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+    }
+  return m;
+}
+
 // Axis-aligned cube [-1, 1]³, outward-oriented; `open_top` drops the two z = +1 triangles.
 inline Mesh make_cube(bool open_top = false) {
   Mesh m;
