@@ -39,6 +39,26 @@ class PassClock {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
+// out = the items i of in[0, n) for which keep(i) holds, in order: the backend interface's
+// compaction (flags, an exclusive scan, a scatter), written once over parallel_for and
+// exclusive_scan. Returns how many were kept.
+template <class Backend, class T, class Keep, class Out>
+uint64_t compact(Backend& backend, const T* in, uint64_t n, Keep keep, Out& out) {
+  typename Backend::template Array<uint32_t> flag, offset;
+  flag.resize(n);
+  offset.resize(n);
+  uint32_t* f = flag.data();
+  backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) { f[i] = keep(i) ? 1u : 0u; });
+  const uint64_t total = backend.exclusive_scan(f, n, offset.data());
+  out.resize(total);
+  const uint32_t* o = offset.data();
+  T* dst = out.data();
+  backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) {
+    if (f[i]) dst[o[i]] = in[i];
+  });
+  return total;
+}
+
 }  // namespace detail
 
 // Marching cubes after the shared passes (corners, edges, Hermite data): the edges' points are
@@ -69,25 +89,10 @@ Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t
     });
   }
   // Faces with an edge not listed (a cell missing: a failed bound) are dropped, as in DC.
-  U32 keep, keep_offset;
-  keep.resize(face_total);
-  keep_offset.resize(face_total);
-  {
-    const uvec3* t = triangles.data();
-    uint32_t* k = keep.data();
-    backend.parallel_for(face_total, [=](uint64_t i) { k[i] = t[i].x != kEmptyLane; });
-  }
-  const uint64_t kept = backend.exclusive_scan(keep.data(), face_total, keep_offset.data());
+  const uvec3* t = triangles.data();
+  const uint64_t kept = detail::compact(
+      backend, t, face_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, out.triangles);
   stats.open_edges = face_total - kept;
-  out.triangles.resize(kept);
-  {
-    const uvec3* t = triangles.data();
-    const uint32_t *k = keep.data(), *o = keep_offset.data();
-    uvec3* dst = out.triangles.data();
-    backend.parallel_for(face_total, [=](uint64_t i) {
-      if (k[i]) dst[o[i]] = t[i];
-    });
-  }
   stats.seconds.output = clock.lap();
   return Status::Ok();
 }
@@ -127,43 +132,28 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   }
   for (int level = level_top;; --level) {
     const int32_t size = kBlockCells << level;
-    U32 keep, offset;
-    keep.resize(candidates.size());
-    offset.resize(candidates.size());
-    {
-      const GridCoord* c = candidates.data();
-      uint32_t* k = keep.data();
-      backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
-        const GridCoord b = c[i];
-        bool meets = false;
-        if (b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2]) {
+    const GridCoord* c = candidates.data();
+    const uint64_t count = detail::compact(
+        backend, c, candidates.size(),
+        [=] GWNRT_HD(uint64_t i) {
+          const GridCoord b = c[i];
+          if (!(b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2]))
+            return false;
           const vec3 lo = grid.corner_position({b.x * size, b.y * size, b.z * size});
           const vec3 hi = grid.corner_position({(b.x + 1) * size, (b.y + 1) * size, (b.z + 1) * size});
-          meets = scout.may_meet(lo, hi);
-        }
-        k[i] = meets ? 1u : 0u;
-      });
-    }
-    const uint64_t count = backend.exclusive_scan(keep.data(), keep.size(), offset.data());
+          return scout.may_meet(lo, hi);
+        },
+        kept);
     if (Status s = reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
     bytes_live -= count * sizeof(GridCoord) * (level > 0 ? 9 : 1);
-    kept.resize(count);
-    {
-      const GridCoord* c = candidates.data();
-      const uint32_t *k = keep.data(), *o = offset.data();
-      GridCoord* dst = kept.data();
-      backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
-        if (k[i]) dst[o[i]] = c[i];
-      });
-    }
     if (level == 0) break;
     candidates.resize(count * 8);
     const GridCoord* src = kept.data();
-    GridCoord* c = candidates.data();
+    GridCoord* children = candidates.data();
     backend.parallel_for(count * 8, [=] GWNRT_HD(uint64_t i) {
       const GridCoord b = src[i / 8];
       const int d = int(i % 8);
-      c[i] = {2 * b.x + (d & 1), 2 * b.y + ((d >> 1) & 1), 2 * b.z + ((d >> 2) & 1)};
+      children[i] = {2 * b.x + (d & 1), 2 * b.y + ((d >> 1) & 1), 2 * b.z + ((d >> 2) & 1)};
     });
   }
   stats.active_blocks = kept.size();
@@ -304,16 +294,6 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   typename Backend::template Array<uvec3> triangles;
   triangles.resize(2 * edge_total);
   backend.parallel_for(edge_total, QuadPass{view, edges.data(), hermite.data(), positions.data(), triangles.data()});
-  U32 keep_face, face_offset;
-  keep_face.resize(2 * edge_total);
-  face_offset.resize(2 * edge_total);
-  {
-    const uvec3* t = triangles.data();
-    uint32_t* k = keep_face.data();
-    backend.parallel_for(2 * edge_total, [=] GWNRT_HD(uint64_t i) { k[i] = t[i].x != kEmptyLane; });
-  }
-  const uint64_t face_total = backend.exclusive_scan(keep_face.data(), keep_face.size(), face_offset.data());
-  stats.open_edges = (2 * edge_total - face_total) / 2;
   stats.seconds.faces = clock.lap();
 
   // 7. Normals.
@@ -329,17 +309,12 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   // 8. Output (indexed).
   out.positions.resize(vertex_total);
   out.normals.resize(vertex_total);
-  out.triangles.resize(face_total);
   backend.copy_out(positions, out.positions.data());
   backend.copy_out(normals, out.normals.data());
-  {
-    const uvec3* t = triangles.data();
-    const uint32_t *k = keep_face.data(), *o = face_offset.data();
-    uvec3* dst = out.triangles.data();
-    backend.parallel_for(2 * edge_total, [=](uint64_t i) {
-      if (k[i]) dst[o[i]] = t[i];
-    });
-  }
+  const uvec3* t = triangles.data();
+  const uint64_t face_total = detail::compact(
+      backend, t, 2 * edge_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, out.triangles);
+  stats.open_edges = (2 * edge_total - face_total) / 2;
   stats.seconds.output = clock.lap();
   return Status::Ok();
 }
