@@ -210,7 +210,10 @@ int main(int argc, char** argv) {
     gwnrt::MeshQualityReport quality;
     gwnrt::SurfaceDistanceOptions distance_options;
     distance_options.level = options.level;
-    if (Status q = gwnrt::mesh_quality_report(model, out, distance_options, quality, options.soup); !q.ok())
+    // A soup's corners, and the copies a UV seam splits off, are welded by position: the
+    // topology is the surface's, not the texture's.
+    const bool weld = options.soup || !out.uvs.empty();
+    if (Status q = gwnrt::mesh_quality_report(model, out, distance_options, quality, weld); !q.ok())
       return fail(kProgram, "--report: " + q.message());
     const nlohmann::json j = report_json(stats, quality, mesh_seconds, out.positions.size(), out.triangles.size());
     if (report) print_report(j);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "gwnrt/meshing/attribute_transfer.h"
 #include "gwnrt/meshing/mesh_pipeline.h"
 #include "meshing/host_backend.h"
 
@@ -31,8 +32,8 @@ Status validate_options(const MeshingOptions& o) {
   if (o.winding.taylor.order < 0 || o.winding.taylor.order > 2 || !(o.winding.taylor.beta > 0.0f) ||
       !std::isfinite(o.winding.taylor.beta))
     return {StatusCode::kInvalidArgument, "meshing: Taylor order must be 0, 1 or 2 and beta finite and > 0"};
-  if (o.attributes & ~uint32_t(kAttributeSource))
-    return {StatusCode::kUnavailable, "meshing: only the source attribute (nearest triangle) is available yet"};
+  if (o.attributes & ~uint32_t(kAttributeSource | kAttributeUv | kAttributeColor))
+    return {StatusCode::kInvalidArgument, "meshing: unknown attribute flags (source, uv and color exist)"};
   return Status::Ok();
 }
 
@@ -67,10 +68,14 @@ Status make_grid(const ModelView& view, const MeshingOptions& o, MeshGrid& grid)
 Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out, MeshingStats& stats) {
   out = SurfaceMesh{};
   if (Status s = validate_options(options); !s.ok()) return s;
+  if (Status s = check_attributes(model.mesh(), options.attributes); !s.ok()) return s;
   const ModelView view = model.view();
   MeshGrid grid;
   if (Status s = make_grid(view, options, grid); !s.ok()) return s;
-  for (int a = 0; a < 3; ++a) stats.grid[a] = uint32_t(grid.cells[a]);
+  for (int a = 0; a < 3; ++a) {
+    stats.grid[a] = uint32_t(grid.cells[a]);
+    stats.origin[a] = grid.origin[a];
+  }
   stats.cell_size = grid.cell;
   // The sheets bound the distance to S only when classified for this level and exactly (the
   // multipole's classification decides within a tolerance); otherwise the distance to M does.
@@ -81,43 +86,23 @@ Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, S
     out = SurfaceMesh{};
     return s;
   }
-  const size_t n = out.positions.size();
-  if (options.attributes & kAttributeSource) {
-    out.source_triangles.resize(n);
-    out.source_barycentrics.resize(n);
-    backend.parallel_for(
-        n,
-        [&](uint64_t i) {
-          const NearestPrimitive p = unsigned_distance(view.triangles, out.positions[i]);
-          out.source_triangles[i] = p.primitive;
-          out.source_barycentrics[i] = {p.u, p.v};
-        },
-        256);
+  if (Status s = transfer_attributes(model.mesh(), view.triangles, options.attributes, out); !s.ok()) {
+    out = SurfaceMesh{};
+    return s;
   }
   if (options.soup) {
-    SurfaceMesh soup;
-    const size_t t = out.triangles.size();
-    soup.positions.resize(3 * t);
-    soup.normals.resize(3 * t);
-    soup.triangles.resize(t);
-    const bool source = !out.source_triangles.empty();
-    if (source) {
-      soup.source_triangles.resize(3 * t);
-      soup.source_barycentrics.resize(3 * t);
-    }
-    backend.parallel_for(t, [&](uint64_t f) {
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = out.triangles[f][k];
-        soup.positions[3 * f + k] = out.positions[v];
-        soup.normals[3 * f + k] = out.normals[v];
-        if (source) {
-          soup.source_triangles[3 * f + k] = out.source_triangles[v];
-          soup.source_barycentrics[3 * f + k] = out.source_barycentrics[v];
-        }
-      }
-      soup.triangles[f] = uvec3(uint32_t(3 * f), uint32_t(3 * f + 1), uint32_t(3 * f + 2));
+    // Three vertices of its own per triangle, each a copy of the indexed corner's.
+    const uint64_t t = out.triangles.size();
+    for_each_vertex_array(out, [&](auto& a) {
+      if (a.empty()) return;
+      std::remove_cvref_t<decltype(a)> corners(3 * t);
+      backend.parallel_for(t, [&](uint64_t f) {
+        for (int k = 0; k < 3; ++k) corners[3 * f + k] = a[out.triangles[f][k]];
+      });
+      a = std::move(corners);
     });
-    out = std::move(soup);
+    backend.parallel_for(
+        t, [&](uint64_t f) { out.triangles[f] = uvec3(uint32_t(3 * f), uint32_t(3 * f + 1), uint32_t(3 * f + 2)); });
   }
   return Status::Ok();
 }

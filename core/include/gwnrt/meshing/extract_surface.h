@@ -47,7 +47,8 @@ struct MeshingPassTimes {
 struct MeshingStats {
   uint32_t grid[3] = {0, 0, 0};  // cells per axis
   float cell_size = 0;
-  uint64_t active_blocks = 0;     // blocks of kBlockCells³ cells that S may meet
+  float origin[3] = {0, 0, 0};  // the grid's lowest corner: cell (i, j, k) spans origin + cell_size · [i, i + 1] × ...
+  uint64_t active_blocks = 0;   // blocks of kBlockCells³ cells that S may meet
   uint64_t evaluated_blocks = 0;  // with their corners' neighbours
   uint64_t corners = 0;           // corner values evaluated
   uint64_t crossing_edges = 0;    // sign-changing edges (one quad each)

@@ -23,4 +23,16 @@ struct SurfaceMesh {
   std::vector<glm::vec4> colors;  // carried from the source's vertex colours, RGBA in [0, 1]
 };
 
+// fn(array) for each per-vertex array of m, for the code that treats them alike (soup expansion,
+// vertex splitting and removal); a new per-vertex array is added here.
+template <class M, class Fn>
+void for_each_vertex_array(M& m, Fn&& fn) {
+  fn(m.positions);
+  fn(m.normals);
+  fn(m.source_triangles);
+  fn(m.source_barycentrics);
+  fn(m.uvs);
+  fn(m.colors);
+}
+
 }  // namespace gwnrt
