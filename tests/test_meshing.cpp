@@ -100,6 +100,37 @@ bool share_a_face(int a, int b) {
   return false;
 }
 
+// Every pair of cells sharing an ambiguous face (the face's 4 signs, the two cells' other 4 each):
+// where both have a tunnel through it, all four of the face's crossed edges are one component
+// in both cells under the default pairing (their two vertices would be joined by four triangles),
+// and after the flip in neither.
+TEST(MeshingCell, FlippingAFaceWithTunnelsOnBothSidesSeparatesItsSegments) {
+  const auto one_component = [](uint32_t inside, int face, uint32_t flipped) {
+    const CellComponents parts = cell_components(inside, flipped);
+    const CellFace f = cell_face(face);
+    for (int k = 1; k < 4; ++k)
+      if (parts.of_edge[f.edge[k]] != parts.of_edge[f.edge[0]]) return false;
+    return true;
+  };
+  int both_tunnels = 0;
+  for (int face = 0; face < 6; ++face) {
+    const CellFace f = cell_face(face), g = cell_face(face ^ 1);  // g: the same corners, one cell over
+    for (uint32_t a = 0; a < 256; ++a)
+      for (uint32_t far = 0; far < 16; ++far) {
+        // The cell across: its face g holds a's face f corners; its other four corners from `far`.
+        uint32_t b = 0;
+        for (int k = 0; k < 4; ++k) b |= ((a >> f.corner[k]) & 1u) << g.corner[k];
+        for (int k = 0; k < 4; ++k) b |= ((far >> k) & 1u) << cell_face(face).corner[k];
+        if (!tunnel_through_face(a, face) || !tunnel_through_face(b, face ^ 1)) continue;
+        ++both_tunnels;
+        ASSERT_TRUE(one_component(a, face, 0) && one_component(b, face ^ 1, 0)) << a << " " << b;
+        EXPECT_FALSE(one_component(a, face, 1u << face)) << "pattern " << a << " face " << face;
+        EXPECT_FALSE(one_component(b, face ^ 1, 1u << (face ^ 1))) << "pattern " << b << " face " << (face ^ 1);
+      }
+  }
+  EXPECT_GT(both_tunnels, 0);
+}
+
 TEST(MeshingCell, LoopsAreTheComponentsInOrder) {
   for (uint32_t mask = 0; mask < 256; ++mask) {
     const CellComponents parts = cell_components(mask);

@@ -338,6 +338,31 @@ GWNRT_HD inline int cell_inside_mask(const SparseGridView& view, uint64_t item, 
   return int(mask);
 }
 
+// The inside mask of any cell with a slot, -1 where a corner is not evaluated.
+GWNRT_HD inline int inside_mask_at(const SparseGridView& view, const GridCoord& cell) {
+  uint32_t mask = 0;
+  for (int k = 0; k < kCellCorners; ++k) {
+    const float f = view.corner_value_at({cell.x + (k & 1), cell.y + ((k >> 1) & 1), cell.z + ((k >> 2) & 1)});
+    if (f != f) return -1;
+    mask |= uint32_t(is_inside(f)) << k;
+  }
+  return int(mask);
+}
+
+// The faces of a cell whose pairing is flipped (visit_face_segments): those with a tunnel through
+// them in both this cell and the cell across (tunnel_through_face).
+GWNRT_HD inline uint32_t flipped_faces(const SparseGridView& view, const GridCoord& cell, uint32_t inside) {
+  uint32_t flipped = 0;
+  for (int face = 0; face < 6; ++face) {
+    if (!tunnel_through_face(inside, face)) continue;
+    GridCoord other = cell;
+    other[face >> 1] += (face & 1) ? 1 : -1;
+    const int mask = inside_mask_at(view, other);
+    if (mask >= 0 && tunnel_through_face(uint32_t(mask), face ^ 1)) flipped |= 1u << face;
+  }
+  return flipped;
+}
+
 // The cells around each crossing edge, marked (cell_parts = 1) so that the count reads the
 // corners of those cells only: on the 202k dragon at 512³ one cell in 16 of the slots' cells has
 // a crossing edge, and reading every cell's corners was 9% of the mesher's time (perf).
@@ -370,7 +395,8 @@ struct CellCountPass {
       const GridCoord cell = view.coord_of_item(item);
       const bool in_grid = cell.x < view.grid.cells[0] && cell.y < view.grid.cells[1] && cell.z < view.grid.cells[2];
       const int mask = in_grid ? cell_inside_mask(view, item, cell) : -1;
-      if (mask > 0 && mask < 255) parts = packed_cell_components(uint32_t(mask));
+      if (mask > 0 && mask < 255)
+        parts = packed_cell_components(uint32_t(mask), flipped_faces(view, cell, uint32_t(mask)));
     }
     cell_parts[item] = parts;
     cell_vertex_count[item] = uint32_t(packed_count(parts));
