@@ -21,6 +21,7 @@
 
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/io/mesh_writer.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -558,6 +559,35 @@ std::vector<BadCase> bad_cases() {
       {"obj_bad_corner_texture.obj", kTri + "f 1 2/a 3\n", P, {":4:", "'2/a'"}},
       // OBJ content
       {"obj_index_zero.obj", kTri + "f 0 1 2\n", M, {":4:", "vertex index 0 is invalid"}},
+      // OBJ texture coordinates and colours
+      {"obj_vt_bad_number.obj", kTri + "vt 0 x\nf 1/1 2/1 3/1\n", P, {":4:", "malformed number 'x' in texture"}},
+      {"obj_vt_too_many.obj", kTri + "vt 0 1 2 3\nf 1/1 2/1 3/1\n", P, {":4:", "texture coordinate has 4 numbers"}},
+      {"obj_vt_empty.obj", kTri + "vt\nf 1 2 3\n", P, {":4:", "has 0 numbers"}},
+      {"obj_vt_nan.obj", kTri + "vt nan 0\nf 1/1 2/1 3/1\n", M, {":4:", "texture coordinate 1 is not finite"}},
+      {"obj_vt_index_range.obj",
+       kTri + "vt 0 0\nf 1/1 2/9 3/1\n",
+       M,
+       {":5:", "texture index 9 is out of range", "1 texture"}},
+      {"obj_vt_relative_range.obj", kTri + "vt 0 0\nf 1/-2 2/1 3/1\n", M, {":5:", "relative texture index -2"}},
+      {"obj_vt_index_zero.obj", kTri + "vt 0 0\nf 1/0 2/1 3/1\n", M, {":5:", "'1/0' is out of range"}},
+      {"obj_vt_mixed_corners.obj",
+       kTri + "vt 0 0\nf 1/1 2 3/1\n",
+       M,
+       {":5:", "texture indices for 2 of its 3 corners"}},
+      {"obj_colour_nan.obj", "v 0 0 0 1 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", M, {":1:", "non-finite colour"}},
+      // PLY attributes
+      {"ply_red_list.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty list "
+       "uchar uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 1 5\n1 0 0 1 5\n0 1 "
+       "0 1 5\n3 0 1 2\n",
+       P,
+       {"'red' is a list"}},
+      {"ply_texcoord_length.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face "
+       "2\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 "
+       "0\n3 0 1 2 6 0 0 1 0 0 1\n3 0 2 1 4 0 0 1 0\n",
+       M,
+       {"face 1 has 4 texcoord values", "needs 6"}},
       {"obj_index_too_big.obj", kTri + "f 1 2 4\n", M, {":4:", "vertex index 4 is out of range", "3 vertices"}},
       {"obj_index_later_too_big.obj", kTri + "f 1 2 3\nf 1 2 9\nf 1 2 3\n", M, {":5:", "index 9 is out of range"}},
       {"obj_index_huge.obj", kTri + "f 1 2 99999999999999999999999\n", M, {":4:", "out of range"}},
@@ -803,6 +833,192 @@ TEST_F(TempFiles, PrefixesAndCorruptionNeverCrash) {
         EXPECT_EQ(r.triangle_count, m.triangles.size());
       }
     }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Texture coordinates and vertex colours.
+
+TEST_F(TempFiles, ObjKeepsTextureCoordinatesAndColours) {
+  // A quad (fanned) with absolute vt indices, then a triangle with relative ones and a normal index.
+  const std::string obj =
+      "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 0.5 0.25 0.125\n"
+      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.75 0\n"
+      "f 1/1 2/2 3/3 4/4\nf 1/-1 3/-3 2/2/1\n";
+  Mesh m;
+  MeshLoadReport r;
+  ASSERT_TRUE(load_mesh(write("uv.obj", obj), m, &r).ok());
+  expect_mesh(m, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}, {0, 2, 1}});
+  ASSERT_EQ(m.uv_triangles.size(), 3u);
+  EXPECT_EQ(m.uv_triangles[0], uvec3(0, 1, 2));
+  EXPECT_EQ(m.uv_triangles[1], uvec3(0, 2, 3));
+  EXPECT_EQ(m.uv_triangles[2], uvec3(4, 2, 1));
+  ASSERT_EQ(m.uvs.size(), 5u);
+  EXPECT_EQ(m.uvs[4], glm::vec2(0.5f, 0.75f));
+  EXPECT_EQ(m.uvs[2], glm::vec2(1, 1));
+  ASSERT_EQ(m.colors.size(), 4u);
+  EXPECT_EQ(m.colors[0], glm::vec4(1, 0, 0, 1));
+  EXPECT_EQ(m.colors[3], glm::vec4(0.5f, 0.25f, 0.125f, 1));
+  EXPECT_EQ(r.uv_count, 5u);
+  EXPECT_TRUE(r.has_colors);
+  EXPECT_TRUE(r.attributes_dropped.empty()) << r.attributes_dropped;
+}
+
+TEST_F(TempFiles, ObjDropsAttributesSomeElementsLack) {
+  Mesh m;
+  MeshLoadReport r;
+  // The second face has no vt indices; the third vertex no colour.
+  ASSERT_TRUE(load_mesh(write("mixed.obj",
+                              "v 0 0 0 1 1 1\nv 1 0 0 1 1 1\nv 0 1 0\nv 1 1 0 1 1 1\nvt 0 0\n"
+                              "f 1/1 2/1 3/1\nf 2 4 3\n"),
+                        m, &r)
+                  .ok());
+  EXPECT_EQ(m.triangles.size(), 2u);
+  EXPECT_TRUE(m.uvs.empty() && m.uv_triangles.empty());
+  EXPECT_TRUE(m.colors.empty());
+  EXPECT_FALSE(r.has_colors);
+  EXPECT_EQ(r.uv_count, 0u);
+  EXPECT_NE(r.attributes_dropped.find("texture coordinates dropped: 1 faces (the first on line 7)"), std::string::npos)
+      << r.attributes_dropped;
+  EXPECT_NE(r.attributes_dropped.find("vertex colours dropped: 3 of 4"), std::string::npos) << r.attributes_dropped;
+  // vt lines no face uses: nothing kept, and said.
+  ASSERT_TRUE(load_mesh(write("unused_vt.obj", kTri + "vt 0 0\nf 1 2 3\n"), m, &r).ok());
+  EXPECT_TRUE(m.uvs.empty());
+  EXPECT_NE(r.attributes_dropped.find("no face refers"), std::string::npos) << r.attributes_dropped;
+}
+
+// The quad 0-1-2-3 as PLY with colour and texture properties of the given types, in `format`.
+std::string attribute_ply(std::string_view format, const std::string& colour_type, bool alpha,
+                          const std::string& uv_names, bool texcoord) {
+  const std::vector<vec3> pos = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const std::string u = uv_names.substr(0, uv_names.find(' ')), v = uv_names.substr(uv_names.find(' ') + 1);
+  std::string h = "ply\nformat " + std::string(format) + " 1.0\nelement vertex 4\nproperty float x\n";
+  h += "property " + colour_type + " red\nproperty float y\nproperty " + colour_type + " green\n";
+  h += "property " + colour_type + " blue\nproperty float z\n";
+  if (alpha) h += "property " + colour_type + " alpha\n";
+  h += "property float " + u + "\nproperty float " + v + "\nelement face 2\n";
+  if (texcoord) h += "property list uchar float texcoord\n";  // before the indices
+  h += "property list uchar int vertex_indices\nend_header\n";
+  PlyBody b(format);
+  const double full = colour_type == "uchar" ? 255 : (colour_type == "ushort" ? 65535 : 1);
+  for (int i = 0; i < 4; ++i) {
+    b.put("float", pos[i].x);
+    b.put(colour_type, full * (i == 1));
+    b.put("float", pos[i].y);
+    b.put(colour_type, (full == 1 ? 0.5 : std::round(full * 0.5)) * (i >= 2));
+    b.put(colour_type, full * (i == 3));
+    b.put("float", pos[i].z);
+    if (alpha) b.put(colour_type, full * (i != 0));
+    b.put("float", 0.25 * i);
+    b.put("float", 1.0 - 0.25 * i);
+    b.end_element();
+  }
+  const int faces[2][3] = {{0, 1, 2}, {0, 2, 3}};
+  for (int f = 0; f < 2; ++f) {
+    if (texcoord) {
+      b.put("uchar", 6);
+      for (int k = 0; k < 3; ++k) {
+        b.put("float", 10 * f + k);
+        b.put("float", -0.5 * k);
+      }
+    }
+    b.put("uchar", 3);
+    for (int k = 0; k < 3; ++k) b.put("int", faces[f][k]);
+    b.end_element();
+  }
+  return h + b.bytes();
+}
+
+TEST_F(TempFiles, PlyKeepsColoursAndTextureCoordinates) {
+  struct Case {
+    std::string format, colour_type;
+    bool alpha;
+    std::string uv_names;
+  };
+  for (const Case& c : {Case{"ascii", "uchar", false, "u v"}, Case{"binary_little_endian", "uchar", true, "s t"},
+                        Case{"binary_big_endian", "ushort", true, "texture_u texture_v"},
+                        Case{"binary_little_endian", "float", false, "texture_s texture_t"}}) {
+    SCOPED_TRACE(c.format + " " + c.colour_type + " " + c.uv_names);
+    Mesh m;
+    MeshLoadReport r;
+    ASSERT_TRUE(
+        load_mesh(write("attr.ply", attribute_ply(c.format, c.colour_type, c.alpha, c.uv_names, false)), m, &r).ok());
+    ASSERT_EQ(m.colors.size(), 4u);
+    const float half =
+        c.colour_type == "uchar" ? float(128.0 / 255.0) : (c.colour_type == "ushort" ? float(32768.0 / 65535.0) : 0.5f);
+    EXPECT_EQ(m.colors[0], glm::vec4(0, 0, 0, c.alpha ? 0 : 1));
+    EXPECT_EQ(m.colors[1], glm::vec4(1, 0, 0, 1));
+    EXPECT_EQ(m.colors[2], glm::vec4(0, half, 0, 1));
+    EXPECT_EQ(m.colors[3], glm::vec4(0, half, 1, 1));
+    ASSERT_EQ(m.uvs.size(), 4u);
+    EXPECT_EQ(m.uv_triangles, m.triangles);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(m.uvs[i], glm::vec2(0.25f * i, 1 - 0.25f * i));
+    EXPECT_EQ(r.uv_count, 4u);
+    EXPECT_TRUE(r.has_colors);
+  }
+  // Per-corner texcoord lists win over the per-vertex pair, and fan like the corners.
+  Mesh m;
+  ASSERT_TRUE(
+      load_mesh(write("texcoord.ply", attribute_ply("binary_little_endian", "uchar", false, "u v", true)), m).ok());
+  ASSERT_EQ(m.uvs.size(), 6u);
+  EXPECT_EQ(m.uv_triangles[0], uvec3(0, 1, 2));
+  EXPECT_EQ(m.uv_triangles[1], uvec3(3, 4, 5));
+  EXPECT_EQ(m.uvs[4], glm::vec2(11, -0.5f));
+  // Only some colour channels: none kept, and said.
+  MeshLoadReport r;
+  ASSERT_TRUE(load_mesh(write("small.ply", small_ply("ascii", Small().positions)), m, &r).ok());
+  EXPECT_TRUE(m.colors.empty());
+  EXPECT_NE(r.attributes_dropped.find("lacks one of red, green, blue"), std::string::npos) << r.attributes_dropped;
+}
+
+TEST(MeshIoValidate, Attributes) {
+  Mesh m = tetrahedron();
+  ASSERT_TRUE(validate_mesh(m).ok());
+  Mesh bad = m;
+  bad.uv_triangles = {{0, 0, 0}};
+  bad.uvs = {{0, 0}};
+  EXPECT_NE(validate_mesh(bad).message().find("UV triangles for"), std::string::npos);
+  bad = m;
+  bad.uvs = {{0, 0}};
+  EXPECT_NE(validate_mesh(bad).message().find("no UV triangles"), std::string::npos);
+  bad = m;
+  bad.uvs = {{0, 0}, {1, 0}};
+  bad.uv_triangles.assign(m.triangles.size(), uvec3(0, 1, 2));
+  EXPECT_NE(validate_mesh(bad).message().find("refers to texture coordinate 2"), std::string::npos)
+      << validate_mesh(bad).message();
+  bad.uvs.push_back({std::numeric_limits<float>::infinity(), 0});
+  EXPECT_NE(validate_mesh(bad).message().find("texture coordinate 2 is not finite"), std::string::npos);
+  bad = m;
+  bad.colors = {{1, 1, 1, 1}};
+  EXPECT_NE(validate_mesh(bad).message().find("vertex colours for"), std::string::npos);
+  bad.colors.assign(m.positions.size(), glm::vec4(1));
+  EXPECT_TRUE(validate_mesh(bad).ok());
+  bad.colors[1].g = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_NE(validate_mesh(bad).message().find("vertex 1 has a non-finite colour"), std::string::npos);
+}
+
+// What the writer writes, the reader reads: float UVs exactly, colours to the writer's 1/255.
+TEST_F(TempFiles, WrittenAttributesReadBack) {
+  SurfaceMesh s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  s.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  s.normals.assign(4, vec3(0, 0, 1));
+  s.uvs = {{0.1f, 0.2f}, {0.3f, 0.4f}, {0.5f, 0.6f}, {0.7f, 0.8f}};
+  s.colors = {{0, 0.2f, 0.4f, 1}, {1, 0.5f, 0, 0.6f}, {0.3f, 0.3f, 0.3f, 1}, {0.9f, 0.1f, 0.7f, 0}};
+  for (const char* name : {"out.ply", "out.obj"}) {
+    SCOPED_TRACE(name);
+    const std::string path = (dir_ / name).string();
+    ASSERT_TRUE(write_surface_mesh(path, s).ok());
+    Mesh m;
+    ASSERT_TRUE(load_mesh(path, m).ok());
+    ASSERT_EQ(m.uv_triangles.size(), s.triangles.size());
+    ASSERT_EQ(m.colors.size(), 4u);
+    const bool ply = std::string(name) == "out.ply";
+    for (size_t t = 0; t < s.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(m.uvs[m.uv_triangles[t][k]], s.uvs[s.triangles[t][k]]);
+    for (size_t i = 0; i < 4; ++i)
+      for (int c = 0; c < (ply ? 4 : 3); ++c)
+        EXPECT_NEAR(m.colors[i][c], s.colors[i][c], ply ? 0.5 / 255 + 1e-6 : 0) << "vertex " << i << " channel " << c;
   }
 }
 

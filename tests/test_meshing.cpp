@@ -2,6 +2,7 @@
 // against the analytic surfaces and S itself.
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <random>
 #include <vector>
@@ -10,6 +11,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "cli_util.h"
+#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/meshing/cell_topology.h"
 #include "gwnrt/meshing/dual_contouring.h"
 #include "gwnrt/meshing/extract_surface.h"
@@ -774,6 +776,55 @@ TEST_F(MeshCliTest, WritesTheLibrarysMesh) {
   ASSERT_EQ(read.positions.size(), lib.positions.size());
   ASSERT_EQ(read.triangles.size(), lib.triangles.size());
   for (size_t i = 0; i < lib.positions.size(); ++i) ASSERT_EQ(read.positions[i], lib.positions[i]);
+}
+
+// UVs and colours from an OBJ (a cube, per-corner vt of six charts, v x y z r g b) to the PLY
+// written: the library's transfer, and a clear refusal for a mesh without them.
+TEST_F(MeshCliTest, CarriesTheInputsUvsAndColours) {
+  const Mesh cube = test::make_cube();
+  std::string obj;
+  for (const vec3& p : cube.positions)
+    obj += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + " " +
+           std::to_string(0.5 + 0.5 * p.x) + " 0.25 " + std::to_string(0.5 - 0.5 * p.z) + "\n";
+  for (size_t t = 0; t < cube.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      obj += "vt " + std::to_string(0.1 * double(t / 2) + 0.01 * k) + " " + std::to_string(0.3 * k) + "\n";
+  for (size_t t = 0; t < cube.triangles.size(); ++t) {
+    obj += "f";
+    for (int k = 0; k < 3; ++k)
+      obj += " " + std::to_string(cube.triangles[t][k] + 1) + "/" + std::to_string(3 * t + k + 1);
+    obj += "\n";
+  }
+  const std::string in = test::temp_path("textured_cube.obj"), out = test::temp_path("textured_cube.ply");
+  {
+    std::ofstream f(in);
+    f << obj;
+  }
+  const test::RunResult r = test::run_program(
+      binary_, test::quote(in) + " -o " + test::quote(out) + " --resolution 16 --attributes uv,color -v");
+  ASSERT_TRUE(r.exited && r.exit_code == 0) << r.err;
+  EXPECT_NE(r.err.find("36 UVs, vertex colours"), std::string::npos) << r.err;
+  Mesh source, read;
+  ASSERT_TRUE(load_mesh(in, source).ok());
+  ASSERT_TRUE(load_mesh(out, read).ok());
+  MeshingOptions o = options_at(16);
+  o.attributes = kAttributeUv | kAttributeColor;
+  SurfaceMesh lib;
+  ASSERT_TRUE(extract_surface(test::build_model(source), o, lib).ok());
+  ASSERT_EQ(read.positions.size(), lib.positions.size());
+  ASSERT_EQ(read.uvs.size(), lib.uvs.size());
+  ASSERT_EQ(read.colors.size(), lib.colors.size());
+  for (size_t i = 0; i < lib.positions.size(); ++i) {
+    ASSERT_EQ(read.uvs[i], lib.uvs[i]) << "vertex " << i;
+    for (int c = 0; c < 4; ++c) ASSERT_NEAR(read.colors[i][c], lib.colors[i][c], 0.5 / 255 + 1e-6) << "vertex " << i;
+  }
+  const test::RunResult refused = test::run_program(binary_, test::quote(test::data_path("bunny.obj")) + " -o " +
+                                                                 test::quote(out) + " --resolution 16 --attributes uv");
+  ASSERT_TRUE(refused.exited);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("bunny.obj: meshing: UVs were asked for but the source mesh has no texture coordinates"),
+            std::string::npos)
+      << refused.err;
 }
 
 TEST_F(MeshCliTest, RefusesBadArgumentsAndUnwritableOutput) {

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gwnrt/io/mesh_writer.h"
+#include "gwnrt/meshing/attribute_transfer.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_quality.h"
 #include "load_model.h"
@@ -169,9 +170,14 @@ int main(int argc, char** argv) {
   gwnrt::examples::ModelLoad loaded;
   if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(kProgram, s.message());
   if (chatty)
-    std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments; loaded and built in %.3f s\n", kProgram,
+    std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),
-                 loaded.load_seconds + loaded.build_seconds);
+                 loaded.report.uv_count ? (", " + std::to_string(loaded.report.uv_count) + " UVs").c_str() : "",
+                 loaded.report.has_colors ? ", vertex colours" : "", loaded.load_seconds + loaded.build_seconds);
+  if (Status a = gwnrt::check_attributes(model.mesh(), options.attributes); !a.ok())
+    return fail(kProgram, mesh_path + ": " + a.message());
+  if (!loaded.report.attributes_dropped.empty())
+    std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), loaded.report.attributes_dropped.c_str());
 
   gwnrt::SurfaceMesh out;
   gwnrt::MeshingStats stats;

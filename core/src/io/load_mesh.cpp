@@ -34,6 +34,8 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
 
   rep.vertex_count = m.positions.size();
   rep.triangle_count = m.triangles.size();
+  rep.uv_count = m.uvs.size();
+  rep.has_colors = !m.colors.empty();
   for (const uvec3& t : m.triangles) {
     rep.degenerate_triangles += is_degenerate_triangle(m.positions[t.x], m.positions[t.y], m.positions[t.z]);
   }

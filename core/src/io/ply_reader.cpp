@@ -1,5 +1,8 @@
-// The strict PLY reader (readers.h): ASCII, binary little and big endian; vertex x, y, z and
-// face vertex_indices, every other element and property skipped by its declared type.
+// The strict PLY reader (readers.h): ASCII, binary little and big endian; vertex x, y, z, colour
+// (red green blue [alpha]) and texture coordinates (u v, s t, texture_u texture_v or texture_s
+// texture_t), face vertex_indices and texcoord (per-corner UVs); every other element and property
+// skipped by its declared type.
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <optional>
@@ -47,8 +50,11 @@ struct PlyProp {
   Ty type = Ty::kF32;  // the item type for a list
   bool list = false;
   Ty count_type = Ty::kU8;
-  int coord = -1;  // 0, 1, 2 for the vertex x, y, z
+  int role = -1;  // what a vertex property holds: a VertexRole, or -1 (skipped)
 };
+
+// The vertex properties kept, as indices into the values read per vertex.
+enum VertexRole { kX, kY, kZ, kU, kV, kRed, kGreen, kBlue, kAlpha, kRoleCount };
 
 struct PlyElem {
   std::string name;
@@ -63,7 +69,10 @@ struct PlyHeader {
   std::vector<PlyElem> elems;
   int vertex = -1;  // element indices
   int face = -1;
-  int face_list = -1;  // property index of vertex_indices within the face element
+  int face_list = -1;      // property index of vertex_indices within the face element
+  int face_texcoord = -1;  // property index of texcoord (2 floats per corner), or -1
+  bool vertex_uvs = false, vertex_colors = false;
+  std::string dropped;  // why colour properties found were not kept
   size_t data_offset = 0;
   size_t end_header_line = 0;
 };
@@ -175,22 +184,53 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
   if (vertex.count > kMaxVertices) {
     return {StatusCode::kInvalidMesh, cat(path, ": too many vertices (", vertex.count, ", at most 2^32)")};
   }
-  static constexpr const char* kCoordNames[3] = {"x", "y", "z"};
-  for (int k = 0; k < 3; ++k) {
-    PlyProp* found = nullptr;
+  auto find_scalar = [&](const char* name, PlyProp*& found) -> Status {
+    found = nullptr;
     for (PlyProp& p : vertex.props) {
-      if (p.name == kCoordNames[k]) {
+      if (p.name == name) {
         found = &p;
         break;
       }
     }
+    if (found && found->list) {
+      return {StatusCode::kParseError, cat(path, ": vertex property '", name, "' is a list, not a scalar")};
+    }
+    return Status::Ok();
+  };
+  static constexpr const char* kCoordNames[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    PlyProp* found = nullptr;
+    if (Status s = find_scalar(kCoordNames[k], found); !s.ok()) return s;
     if (!found) {
       return {StatusCode::kParseError, cat(path, ": the vertex element has no '", kCoordNames[k], "' property")};
     }
-    if (found->list) {
-      return {StatusCode::kParseError, cat(path, ": vertex property '", kCoordNames[k], "' is a list, not a scalar")};
+    found->role = k;
+  }
+  // Colours: all three channels, or none kept.
+  static constexpr const char* kColourNames[4] = {"red", "green", "blue", "alpha"};
+  PlyProp* colour[4] = {};
+  for (int k = 0; k < 4; ++k)
+    if (Status s = find_scalar(kColourNames[k], colour[k]); !s.ok()) return s;
+  if (colour[0] && colour[1] && colour[2]) {
+    for (int k = 0; k < 4; ++k)
+      if (colour[k]) colour[k]->role = kRed + k;
+    h.vertex_colors = true;
+  } else if (colour[0] || colour[1] || colour[2]) {
+    h.dropped = "vertex colours dropped: the vertex element lacks one of red, green, blue";
+  }
+  // Texture coordinates: the first pair present, by the names exporters use.
+  static constexpr const char* kUvNames[4][2] = {
+      {"u", "v"}, {"s", "t"}, {"texture_u", "texture_v"}, {"texture_s", "texture_t"}};
+  for (const auto& names : kUvNames) {
+    PlyProp *u = nullptr, *v = nullptr;
+    if (Status s = find_scalar(names[0], u); !s.ok()) return s;
+    if (Status s = find_scalar(names[1], v); !s.ok()) return s;
+    if (u && v) {
+      u->role = kU;
+      v->role = kV;
+      h.vertex_uvs = true;
+      break;
     }
-    found->coord = k;
   }
   if (h.face >= 0) {
     const PlyElem& face = h.elems[static_cast<size_t>(h.face)];
@@ -206,6 +246,12 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
     if (!info(fl.type).is_int) {
       return {StatusCode::kParseError,
               cat(path, ": face property '", fl.name, "' has non-integer index type '", info(fl.type).name, "'")};
+    }
+    for (size_t j = 0; j < face.props.size(); ++j) {
+      if (face.props[j].name != "texcoord") continue;
+      if (!face.props[j].list) return {StatusCode::kParseError, cat(path, ": face property 'texcoord' is not a list")};
+      h.face_texcoord = static_cast<int>(j);
+      break;
     }
   }
   return Status::Ok();
@@ -372,7 +418,11 @@ struct AsciiSource {
 template <class Src>
 Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh& mesh, MeshLoadReport& rep) {
   const uint64_t nverts = h.elems[static_cast<size_t>(h.vertex)].count;
-  std::vector<uint32_t> corners;
+  std::vector<uint32_t> corners, uv_corners;
+  std::vector<float> texcoord;  // one face's texcoord list
+  std::vector<glm::vec2> vertex_uvs, corner_uvs;
+  std::vector<uvec3> corner_uv_triangles;
+  std::vector<glm::vec4> colors;
 
   for (size_t e = 0; e < h.elems.size(); ++e) {
     const PlyElem& el = h.elems[e];
@@ -390,18 +440,26 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
       return {StatusCode::kParseError, cat(src.where(path), ": truncated data: the header declares ", el.count, " ",
                                            el.name, " elements but only ", src.remaining(), " bytes of data remain")};
     }
-    if (is_vertex) mesh.positions.resize(el.count);
+    if (is_vertex) {
+      mesh.positions.resize(el.count);
+      if (h.vertex_uvs) vertex_uvs.resize(el.count);
+      if (h.vertex_colors) colors.resize(el.count);
+    }
 
     for (uint64_t i = 0; i < el.count; ++i) {
-      float xyz[3] = {0, 0, 0};
+      float value[kRoleCount] = {0, 0, 0, 0, 0, 0, 0, 0, 1};
+      texcoord.clear();
+      bool face_has_texcoord = false;
       for (size_t j = 0; j < el.props.size(); ++j) {
         const PlyProp& pr = el.props[j];
         Res r;
         if (!pr.list) {
-          if (is_vertex && pr.coord >= 0) {
+          if (is_vertex && pr.role >= 0) {
             double v = 0;
             r = src.read_real(pr.type, v);
-            xyz[pr.coord] = static_cast<float>(v);  // IEC 559 narrowing: rounds, overflows to infinity
+            // Integer colour channels span their type's range (uchar: 0-255).
+            if (pr.role >= kRed && info(pr.type).is_int) v = std::max(v, 0.0) / double(info(pr.type).hi);
+            value[pr.role] = static_cast<float>(v);  // IEC 559 narrowing: rounds, overflows to infinity
           } else {
             r = src.skip(pr.type, 1);
           }
@@ -432,6 +490,18 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
               if (corners.size() > 3) ++rep.polygons_fanned;
               fan(corners, mesh.triangles);
             }
+          } else if (r == Res::kOk && is_face && static_cast<int>(j) == h.face_texcoord) {
+            if (static_cast<uint64_t>(n) > src.remaining()) {
+              r = Res::kEnd;
+            } else {
+              face_has_texcoord = true;
+              texcoord.resize(static_cast<size_t>(n));
+              for (int64_t k = 0; k < n && r == Res::kOk; ++k) {
+                double v = 0;
+                r = src.read_real(pr.type, v);
+                texcoord[static_cast<size_t>(k)] = static_cast<float>(v);
+              }
+            }
           } else if (r == Res::kOk) {
             r = src.skip(pr.type, static_cast<uint64_t>(n));
           }
@@ -446,13 +516,41 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
                       el.name, " ", i, ", property '", pr.name, "'")};
         }
       }
-      if (is_vertex) mesh.positions[i] = vec3(xyz[0], xyz[1], xyz[2]);
+      if (is_vertex) {
+        mesh.positions[i] = vec3(value[kX], value[kY], value[kZ]);
+        if (h.vertex_uvs) vertex_uvs[i] = {value[kU], value[kV]};
+        if (h.vertex_colors) colors[i] = {value[kRed], value[kGreen], value[kBlue], value[kAlpha]};
+      }
+      if (is_face && h.face_texcoord >= 0) {
+        // Checked once the whole face is read: texcoord may precede vertex_indices.
+        if (!face_has_texcoord || texcoord.size() != 2 * corners.size()) {
+          return {StatusCode::kInvalidMesh,
+                  cat(src.where(path), ": face ", i, " has ", texcoord.size(), " texcoord values for its ",
+                      corners.size(), " corners (needs ", 2 * corners.size(), ")")};
+        }
+        uv_corners.clear();
+        for (size_t k = 0; k < corners.size(); ++k) {
+          uv_corners.push_back(static_cast<uint32_t>(corner_uvs.size()));
+          corner_uvs.emplace_back(texcoord[2 * k], texcoord[2 * k + 1]);
+        }
+        fan(uv_corners, corner_uv_triangles);
+      }
     }
   }
   if (!src.only_whitespace_left()) {
     return {StatusCode::kParseError, cat(src.where(path), ": unexpected data ", quoted(src.bad_tok),
                                          " after the last element declared in the header")};
   }
+  // Per-corner texture coordinates win over per-vertex ones (they can hold seams).
+  if (h.face_texcoord >= 0 && h.face >= 0) {
+    mesh.uvs = std::move(corner_uvs);
+    mesh.uv_triangles = std::move(corner_uv_triangles);
+  } else if (h.vertex_uvs) {
+    mesh.uvs = std::move(vertex_uvs);
+    mesh.uv_triangles = mesh.triangles;
+  }
+  if (h.vertex_colors) mesh.colors = std::move(colors);
+  rep.attributes_dropped = h.dropped;
   return Status::Ok();
 }
 

@@ -16,11 +16,18 @@ struct MeshLoadReport {
   std::size_t polygons_fanned = 0;       // input faces with more than three corners
   std::size_t degenerate_triangles = 0;  // zero area (repeated or collinear corners): contribute nothing
   std::string format;                    // "obj", "ply-ascii", "ply-binary-le", "ply-binary-be"
+  std::size_t uv_count = 0;              // texture coordinates kept (Mesh::uvs)
+  bool has_colors = false;               // vertex colours kept (Mesh::colors)
+  // Empty, or why UVs or colours in the file were not kept (e.g. only some faces have them).
+  std::string attributes_dropped;
 };
 
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
-// into triangles. Fails, naming the file and the line or element, on malformed content,
-// non-finite coordinates, out-of-range indices and meshes without triangles.
+// into triangles. Texture coordinates (OBJ vt; PLY u v, s t, texture_u texture_v, texture_s
+// texture_t per vertex, or a face texcoord list) and vertex colours (OBJ v x y z r g b; PLY red
+// green blue [alpha], integers scaled to [0, 1]) are kept when every face or vertex has them. Fails, naming the file
+// and the line or element, on malformed content, non-finite coordinates, out-of-range indices and meshes without
+// triangles.
 Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report = nullptr);
 
 }  // namespace gwnrt
