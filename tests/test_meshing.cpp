@@ -5,6 +5,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -782,23 +783,20 @@ TEST_F(MeshCliTest, WritesTheLibrarysMesh) {
 // written: the library's transfer, and a clear refusal for a mesh without them.
 TEST_F(MeshCliTest, CarriesTheInputsUvsAndColours) {
   const Mesh cube = test::make_cube();
-  std::string obj;
+  std::ostringstream obj;
   for (const vec3& p : cube.positions)
-    obj += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + " " +
-           std::to_string(0.5 + 0.5 * p.x) + " 0.25 " + std::to_string(0.5 - 0.5 * p.z) + "\n";
+    obj << "v " << p.x << ' ' << p.y << ' ' << p.z << ' ' << 0.5 + 0.5 * p.x << " 0.25 " << 0.5 - 0.5 * p.z << '\n';
   for (size_t t = 0; t < cube.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      obj += "vt " + std::to_string(0.1 * double(t / 2) + 0.01 * k) + " " + std::to_string(0.3 * k) + "\n";
+    for (int k = 0; k < 3; ++k) obj << "vt " << 0.1 * double(t / 2) + 0.01 * k << ' ' << 0.3 * k << '\n';
   for (size_t t = 0; t < cube.triangles.size(); ++t) {
-    obj += "f";
-    for (int k = 0; k < 3; ++k)
-      obj += " " + std::to_string(cube.triangles[t][k] + 1) + "/" + std::to_string(3 * t + k + 1);
-    obj += "\n";
+    obj << 'f';
+    for (int k = 0; k < 3; ++k) obj << ' ' << cube.triangles[t][k] + 1 << '/' << 3 * t + k + 1;
+    obj << '\n';
   }
   const std::string in = test::temp_path("textured_cube.obj"), out = test::temp_path("textured_cube.ply");
   {
     std::ofstream f(in);
-    f << obj;
+    f << obj.str();
   }
   const test::RunResult r = test::run_program(
       binary_, test::quote(in) + " -o " + test::quote(out) + " --resolution 16 --attributes uv,color -v");

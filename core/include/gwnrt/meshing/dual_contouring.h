@@ -421,22 +421,33 @@ struct CellVertexPass {
     const vec3 lo = view.grid.corner_position(cell);
     const double inv_cell = 1.0 / double(view.grid.cell);
     Qef qef[4];
+    dvec3 box_lo[4] = {dvec3(1.0), dvec3(1.0), dvec3(1.0), dvec3(1.0)},
+          box_hi[4] = {dvec3(0.0), dvec3(0.0), dvec3(0.0), dvec3(0.0)};
     for (int e = 0; e < kCellEdges; ++e) {
       const int corner = edge_corner(e);
       const uint32_t k = edge_index(
           view, {cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)}, edge_axis(e));
       if (k == kEmptyLane) continue;
       const HermitePoint& h = hermite[k];
-      qef[packed_component(parts, e)].add((dvec3(h.point) - dvec3(lo)) * inv_cell, dvec3(h.normal));
+      const int c = packed_component(parts, e);
+      const dvec3 q = (dvec3(h.point) - dvec3(lo)) * inv_cell;
+      qef[c].add(q, dvec3(h.normal));
+      box_lo[c] = glm::min(box_lo[c], q);
+      box_hi[c] = glm::max(box_hi[c], q);
     }
     const uint32_t first = view.cell_vertex_offset[item];
     for (uint32_t p = 0; p < count; ++p) {
-      // Clamped to the cell itself. A sharp edge passing just outside a cell whose grid edges both
+      // Kept in the cell itself. A sharp edge passing just outside a cell whose grid edges both
       // its faces cross has its QEF minimum outside the cell (a turned cube: up to 0.26 cell out),
       // and the clamped vertex lies off the edge; letting such vertices out by a third of a cell
       // put them on the edge but made the output intersect itself (bunny_holes at 128³ and 256³:
-      // 10 and 16 triangle pairs; 0 clamped).
-      const dvec3 x = solve_qef(qef[p], dvec3(0.0), dvec3(1.0));
+      // 10 and 16 triangle pairs; 0 clamped). A cell with two or more components (two sheets, a
+      // thin part) keeps each vertex in the box of its own component's Hermite points: clamped
+      // to the cell, the components' vertices fell onto the same cell edge and their triangles
+      // overlapped (the bunny at 256³ and 512³: 16 pairs each, now 2 and 0; the 202k dragon at
+      // 512³: 28, now 25). Single components keep the whole cell: a cube's corner lies outside
+      // its crossings' box.
+      const dvec3 x = count > 1 ? solve_qef(qef[p], box_lo[p], box_hi[p]) : solve_qef(qef[p], dvec3(0.0), dvec3(1.0));
       positions[first + p] = lo + vec3(x) * view.grid.cell;
       const dvec3 n = qef[p].normal_sum;
       const double length = glm::length(n);
