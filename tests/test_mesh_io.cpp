@@ -575,6 +575,8 @@ std::vector<BadCase> bad_cases() {
        M,
        {":5:", "texture indices for 2 of its 3 corners"}},
       {"obj_colour_nan.obj", "v 0 0 0 1 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", M, {":1:", "non-finite colour"}},
+      {"obj_binary.obj", kTri + std::string("f 1 2 3\n\x01\x02garbage\n"), P, {":5:", "binary content (byte 0x01)"}},
+      {"obj_nul.obj", kTri + std::string("v 1 1\0 1\nf 1 2 3\n", 17), P, {":4:", "byte 0x00"}},
       // PLY attributes
       {"ply_red_list.ply",
        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty list "
@@ -1020,6 +1022,32 @@ TEST_F(TempFiles, WrittenAttributesReadBack) {
       for (int c = 0; c < (ply ? 4 : 3); ++c)
         EXPECT_NEAR(m.colors[i][c], s.colors[i][c], ply ? 0.5 / 255 + 1e-6 : 0) << "vertex " << i << " channel " << c;
   }
+}
+
+// Issue 15, items 10 and 11: a UTF-8 byte-order mark is skipped (it hid the first vertex), and
+// OBJ statements nobody knows are counted and reported, not silently skipped.
+TEST_F(TempFiles, ByteOrderMarkIsSkipped) {
+  const std::string bom = "\xEF\xBB\xBF";
+  Mesh m;
+  ASSERT_TRUE(load_mesh(write("bom.obj", bom + "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), m).ok());
+  expect_mesh(m, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+  ASSERT_TRUE(load_mesh(write("bom.ply", bom + small_ply("ascii", Small().positions)), m).ok());
+  expect_mesh(m, Small().positions, Small().triangles);
+}
+
+TEST_F(TempFiles, UnknownObjStatementsAreReported) {
+  Mesh m;
+  MeshLoadReport r;
+  ASSERT_TRUE(load_mesh(write("unknown.obj",
+                              "# a comment\nv 0 0 0\nvv 1 1 1\nv 1 0 0\nv 0 1 0\ng group\nvn 0 0 1\n"
+                              "this is garbage 1 2 3\nusemtl m\nf 1 2 3\n"),
+                        m, &r)
+                  .ok());
+  expect_mesh(m, {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+  EXPECT_NE(r.warnings.find("2 lines with an unknown statement"), std::string::npos) << r.warnings;
+  EXPECT_NE(r.warnings.find("line 3: 'vv'"), std::string::npos) << r.warnings;
+  ASSERT_TRUE(load_mesh(write("known.obj", "o x\ns 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\np 1\nf 1 2 3\n"), m, &r).ok());
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings;
 }
 
 }  // namespace

@@ -176,6 +176,8 @@ int main(int argc, char** argv) {
                  loaded.report.has_colors ? ", vertex colours" : "", loaded.load_seconds + loaded.build_seconds);
   if (Status a = gwnrt::check_attributes(model.mesh(), options.attributes); !a.ok())
     return fail(kProgram, mesh_path + ": " + a.message());
+  if (!loaded.report.warnings.empty())
+    std::fprintf(stderr, "%s: %s: warning: %s\n", kProgram, mesh_path.c_str(), loaded.report.warnings.c_str());
   if (!loaded.report.attributes_dropped.empty())
     std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), loaded.report.attributes_dropped.c_str());
 

@@ -293,8 +293,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s (%s): %zu vertices, %zu triangles", kProgram, mesh_path.c_str(), report.format.c_str(),
                  report.vertex_count, report.triangle_count);
     if (report.polygons_fanned) std::fprintf(stderr, " (%zu polygons fanned)", report.polygons_fanned);
+    if (report.uv_count) std::fprintf(stderr, ", %zu UVs", report.uv_count);
+    if (report.has_colors) std::fprintf(stderr, ", vertex colours");
     std::fprintf(stderr, ", %zu degenerate, %zu boundary segments%s; loaded in %.3f s\n", report.degenerate_triangles,
                  model.boundary().segment_count(), model.boundary().segment_count() ? "" : " (closed)", load_seconds);
+    if (!report.attributes_dropped.empty())
+      std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), report.attributes_dropped.c_str());
+    if (!report.warnings.empty())
+      std::fprintf(stderr, "%s: %s: warning: %s\n", kProgram, mesh_path.c_str(), report.warnings.c_str());
     std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s, sheets %.3f s: %u of %zu triangles)\n",
                  kProgram, build_seconds, model.timings().tree_seconds, model.timings().boundary_seconds,
                  model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, report.triangle_count);

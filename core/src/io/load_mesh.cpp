@@ -25,10 +25,14 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
   }
   std::string data;
   if (Status s = io::read_whole_file(path, data); !s.ok()) return s;
+  // A UTF-8 byte-order mark (some Windows editors write one) is not content: left in, it glued
+  // itself to the first keyword and the OBJ reader skipped that line.
+  std::string_view content = data;
+  if (content.substr(0, 3) == "\xEF\xBB\xBF") content.remove_prefix(3);
 
   Mesh m;
   MeshLoadReport rep;
-  Status s = is_obj ? io::read_obj(path, data, m, rep) : io::read_ply(path, data, m, rep);
+  Status s = is_obj ? io::read_obj(path, content, m, rep) : io::read_ply(path, content, m, rep);
   if (!s.ok()) return s;
   if (s = validate_mesh(m, path); !s.ok()) return s;
 

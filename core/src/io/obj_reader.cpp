@@ -37,6 +37,18 @@ IntParse parse_obj_corner(string_view tok, int64_t& index, int64_t& texture) {
   return is_int(n) ? IntParse::kOk : IntParse::kMalformed;
 }
 
+// The OBJ statements a reader may meet that say nothing about the triangles' geometry.
+bool is_known_obj_statement(string_view kw) {
+  static constexpr string_view kKnown[] = {
+      "vn",     "vp",    "o",     "g",      "s",      "usemtl",     "mtllib",    "l",        "p",
+      "cstype", "deg",   "bmat",  "step",   "curv",   "curv2",      "surf",      "parm",     "trim",
+      "hole",   "scrv",  "sp",    "end",    "con",    "mg",         "bevel",     "c_interp", "d_interp",
+      "lod",    "ctech", "stech", "maplib", "usemap", "shadow_obj", "trace_obj", "call",     "csh"};
+  for (string_view k : kKnown)
+    if (kw == k) return true;
+  return false;
+}
+
 // A 1-based (or negative, relative) OBJ reference into `defined` items so far, resolved to 0-based;
 // positive ones are checked against the final count by the caller (the largest is tracked).
 struct ObjIndex {
@@ -70,6 +82,8 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
   // Positive indices are checked against the final counts, so a face may precede the vertices
   // it names; the largest one and its line are enough to report a violation.
   ObjIndex vertex_index, uv_index;
+  size_t unknown_statements = 0, first_unknown_line = 0;
+  std::string first_unknown;
   size_t colored_vertices = 0, faces_with_uv = 0, faces_without_uv = 0, first_face_without_uv_line = 0;
   size_t line_no = 0;
   auto at = [&](const auto&... parts) { return cat(path, ":", line_no, ": ", parts...); };
@@ -85,6 +99,15 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
     LineTokens tk{p, hash ? hash : line_end};
     p = nl ? nl + 1 : end;
 
+    // Text only: a control byte (other than whitespace) means the file is not an OBJ at all.
+    for (const char* c = tk.p; c < tk.end; ++c) {
+      const auto b = static_cast<unsigned char>(*c);
+      if (b < 0x20 && !is_blank(*c)) {
+        const char hex[] = "0123456789abcdef";
+        const char byte[3] = {hex[b >> 4], hex[b & 15], 0};
+        return {StatusCode::kParseError, at("binary content (byte 0x", byte, "): not a text OBJ file")};
+      }
+    }
     string_view kw;
     if (!tk.next(kw)) continue;
     if (kw == "v") {
@@ -188,9 +211,18 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
         ++faces_with_uv;
         fan(uv_corners, uv_tris);
       }
+    } else if (!is_known_obj_statement(kw)) {
+      // Known statements (vn vp o g s usemtl mtllib l p, curves, ...) carry nothing the winding
+      // number or the attribute transfer needs; anything else is counted and reported.
+      if (unknown_statements++ == 0) {
+        first_unknown_line = line_no;
+        first_unknown = std::string(kw.substr(0, 32));
+      }
     }
-    // Everything else (vn vp o g s usemtl mtllib l p, curves, ...) carries nothing the winding
-    // number or the attribute transfer needs.
+  }
+  if (unknown_statements > 0) {
+    rep.warnings = cat(unknown_statements, " lines with an unknown statement ignored (the first, line ",
+                       first_unknown_line, ": ", quoted(first_unknown), ")");
   }
   if (vertex_index.max_index > pos.size()) {
     line_no = vertex_index.max_index_line;

@@ -20,6 +20,8 @@ struct MeshLoadReport {
   bool has_colors = false;               // vertex colours kept (Mesh::colors)
   // Empty, or why UVs or colours in the file were not kept (e.g. only some faces have them).
   std::string attributes_dropped;
+  // Empty, or what was skipped that the user may not expect (OBJ lines with unknown statements).
+  std::string warnings;
 };
 
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
