@@ -1131,6 +1131,14 @@ TEST(TraceFuzz, NonFiniteOrZeroRaysAreInvalid) {
   bad.push_back(zero);
   zero.direction = vec3(-0.0f, 0.0f, -0.0f);
   bad.push_back(zero);
+  // Issue 15 item 8: denormal directions (1e-44 reported a hit at t = inf) are too short to
+  // normalise.
+  for (const float tiny : {1e-44f, 1e-40f, 5e-39f}) {
+    zero.direction = vec3(tiny, 0.0f, 0.0f);
+    bad.push_back(zero);
+    zero.direction = vec3(0.0f, -tiny, tiny);
+    bad.push_back(zero);
+  }
   Ray r = good;
   r.tnear = nan;
   bad.push_back(r);
@@ -1162,8 +1170,8 @@ TEST(TraceFuzz, NonFiniteOrZeroRaysAreInvalid) {
   EXPECT_FALSE(hits.back().invalid);
 }
 
-// The contract names only non-finite numbers and a zero direction as invalid: a finite nonzero
-// direction of any length is a ray, and t comes back in its units. |d| = 1e-25 and 1e25 keep
+// The contract names only non-finite numbers and directions shorter than the smallest normal
+// float as invalid: any other finite direction is a ray, and t comes back in its units. |d| = 1e-25 and 1e25 keep
 // t (about 2e25 and 2e-25 here) representable in float.
 TEST(TraceFuzz, TinyAndHugeFiniteDirectionsAreTraced) {
   const GwnModel model = build_model(test::make_cube(true));

@@ -53,6 +53,8 @@ Status read_rays(const std::string& path, std::vector<Ray>& rays) {
         r.origin = vec3(v[0], v[1], v[2]);
         r.direction = vec3(v[3], v[4], v[5]);
         if (r.direction == vec3(0.0f)) return {StatusCode::kParseError, "ray direction is zero"};
+        if (!(glm::length(glm::dvec3(r.direction)) >= double(gwnrt::kMinDirectionLength)))
+          return {StatusCode::kParseError, "ray direction is too short to normalise (below 1.2e-38)"};
         if (!std::isfinite(glm::length(r.direction)))
           return {StatusCode::kParseError, "ray direction is too long (its length overflows a float)"};
         if (count == 8) {

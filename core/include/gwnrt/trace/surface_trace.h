@@ -42,8 +42,10 @@ class SurfaceTracer {
   GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o, Accept accept)
       : m_(m), o_(o), accept_(accept) {
     const float len = float(glm::length(dvec3(ray.direction)));  // in float, |d|² under/overflows for finite d
-    if (!finite3(ray.origin) || !finite3(ray.direction) || !(len > 0.0f) || !is_finite(len) || is_nan(ray.tnear) ||
-        is_nan(ray.tfar)) {
+    // A direction whose length is below the smallest normal float cannot be normalised (1e-44
+    // gave t = inf for a hit): refused like a zero direction.
+    if (!finite3(ray.origin) || !finite3(ray.direction) || !(len >= kMinDirectionLength) || !is_finite(len) ||
+        is_nan(ray.tnear) || is_nan(ray.tfar)) {
       hit_.invalid = true;
       return;
     }

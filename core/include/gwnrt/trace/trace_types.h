@@ -27,10 +27,14 @@ struct TraceOptions {
 
 enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
 
+// The shortest ray direction traced: the smallest normal float (shorter ones, zero included,
+// cannot be normalised and are refused).
+inline constexpr float kMinDirectionLength = 1.17549435e-38f;
+
 struct RayHit {
   bool hit = false;
   bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
-  bool invalid = false;  // rejected input: non-finite numbers or a zero direction
+  bool invalid = false;  // rejected input: non-finite numbers, or a direction shorter than kMinDirectionLength
   HitKind kind = HitKind::kNone;
   float t = kInfinity;  // in units of the ray's own direction
   vec3 position{0.0f};
