@@ -825,6 +825,19 @@ TEST_F(MeshCliTest, CarriesTheInputsUvsAndColours) {
       << refused.err;
 }
 
+// Issue 15 item 16: a count or size that must be positive says so, not CLI11's range with a
+// 300-digit bound; nan is refused too.
+TEST_F(MeshCliTest, PositiveOptionsSayTheyMustBePositive) {
+  for (const std::string args : {" --threads 0", " --threads -2", " --cell-size nan", " --cell-size 0"}) {
+    const test::RunResult r = test::run_program(
+        binary_, test::quote(test::data_path("bunny.obj")) + " -o " + test::quote(test::temp_path("p.ply")) + args);
+    ASSERT_TRUE(r.exited) << args;
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find("> 0"), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.err.find("17976931"), std::string::npos) << args << ": " << r.err;
+  }
+}
+
 TEST_F(MeshCliTest, RefusesBadArgumentsAndUnwritableOutput) {
   const std::string mesh = test::quote(test::data_path("bunny.obj"));
   for (const std::string args :

@@ -27,6 +27,7 @@
 #include <openvdb/tools/VolumeToMesh.h>
 #endif
 
+#include "cli_checks.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_quality.h"
 #include "load_model.h"
@@ -349,7 +350,8 @@ int main(int argc, char** argv) try {
       ->delimiter(',')
       ->check(CLI::Range(1u, 1u << 16))
       ->capture_default_str();
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--samples", settings.samples, "output samples and rays on S of the distance measurements")
       ->check(CLI::Range(1u, 1u << 30))
       ->capture_default_str();

@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_checks.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/geometry/mesh.h"
@@ -74,11 +75,12 @@ int main(int argc, char** argv) {
   int threads = 0;
   uint32_t seed = 1;
   app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: the bundled bunny with holes)");
-  app.add_option("--points", count, "number of query points")->check(CLI::PositiveNumber);
-  app.add_option("--beta", beta, "accuracy scale")->check(CLI::PositiveNumber);
+  app.add_option("--points", count, "number of query points")->check(gwnrt::examples::positive_number());
+  app.add_option("--beta", beta, "accuracy scale")->check(gwnrt::examples::positive_number());
   app.add_option("--brute-seconds", brute_seconds, "time budget of the brute-force baseline")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--seed", seed, "random seed of the point mix");
   std::string json_path;
   app.add_option("--json", json_path, "also write every row and the build timings to this JSON file");

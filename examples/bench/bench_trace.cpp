@@ -35,6 +35,7 @@
 
 #include "brute_force_trace.h"
 #include "camera.h"
+#include "cli_checks.h"
 #if defined(GWNRT_HAVE_EMBREE)
 #include "embree_triangles.h"
 #endif
@@ -236,17 +237,20 @@ int main(int argc, char** argv) {
   app.add_option("meshes", meshes,
                  "OBJ or PLY meshes (default: bunny.obj, bunny_holes.obj, teapot.obj from data/, and "
                  "/tmp/dragon_vrip.ply when it exists)");
-  app.add_option("--width", width, "image width in pixels (one ray per pixel)")->check(CLI::PositiveNumber);
-  app.add_option("--height", height, "image height in pixels")->check(CLI::PositiveNumber);
+  app.add_option("--width", width, "image width in pixels (one ray per pixel)")
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--height", height, "image height in pixels")->check(gwnrt::examples::positive_number());
   app.add_option("--brute-rays", brute_rays, "rays of the brute-force tracer: every k-th pixel")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--brute-seconds", brute_seconds,
                  "time budget of the brute-force tracer per mesh (it stops after the rays started by then)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--eps", options.epsilon, "stopping distance relative to the box diagonal")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--beta", options.beta, "accuracy scale of gwnrt's multipole evaluation")->check(CLI::PositiveNumber);
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--beta", options.beta, "accuracy scale of gwnrt's multipole evaluation")
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--level", options.level, "the level w* of S = ∂{w > w*}");
   app.add_option("--check", check,
                  "after the timings, also trace with the brute force up to this many of the rays where (a) and (b) "

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cli_checks.h"
 #include "gwnrt/io/mesh_writer.h"
 #include "gwnrt/meshing/attribute_transfer.h"
 #include "gwnrt/meshing/extract_surface.h"
@@ -150,7 +151,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--soup", options.soup, "Write a triangle soup (three vertices of its own per triangle)");
   app.add_option("--attributes", attributes, "Per-vertex attributes to carry from the input: source,uv,color");
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_flag("--report", report,
                "Print a quality report: topology, self-intersections, distances to S, time per pass, memory");
   app.add_option("--report-json", report_json_path, "Write the quality report as JSON to this file");

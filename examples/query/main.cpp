@@ -17,6 +17,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_checks.h"
 #include "csv_writer.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
@@ -191,17 +192,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({0, 1, 2}));
   app.add_option("--beta", beta, "Accuracy parameter: expand a cluster when |x - p| > beta * radius")
       ->capture_default_str()
-      ->check(CLI::Validator(
-          [](std::string& text) {
-            double v = 0;
-            const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-            // CLI11's own PositiveNumber lets nan through; the tree needs a finite positive beta.
-            if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v) || v <= 0) {
-              return "beta must be a finite number > 0, got '" + text + "'";
-            }
-            return std::string();
-          },
-          "BETA > 0"));
+      ->check(gwnrt::examples::positive_number());
   CLI::Option* method_option =
       app.add_option("--method", method_name,
                      "How w, grad and hess are evaluated (and the sdf's sign, sdf1, sdf2, proj): crossing (exact: "
@@ -228,9 +219,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0u, 100000u));
   app.add_option("--newton-tolerance", newton_tolerance, "Newton projection (proj): converged when |w - w*| <= this")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--device", device, "Where to evaluate")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose,
                "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");

@@ -28,6 +28,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_checks.h"
 #include "exact_distance.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
@@ -101,13 +102,17 @@ int main(int argc, char** argv) {
   int threads = 0;
   uint64_t seed = 1;
   app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: data/bunny_holes.obj)");
-  app.add_option("--points", count, "sample points around S")->check(CLI::PositiveNumber);
+  app.add_option("--points", count, "sample points around S")->check(gwnrt::examples::positive_number());
   app.add_option("--seed", seed, "random seed (points and lines)");
   app.add_option("--level", level, "the level w* of S = ∂{w > w*}");
-  app.add_option("--beta", beta, "accuracy scale of the multipole evaluation")->check(CLI::PositiveNumber);
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(CLI::PositiveNumber);
-  app.add_option("--cloud", cloud_target, "points on the smooth pieces for the reference")->check(CLI::PositiveNumber);
-  app.add_option("--max-lines", max_lines, "at most this many traced lines for the cloud")->check(CLI::PositiveNumber);
+  app.add_option("--beta", beta, "accuracy scale of the multipole evaluation")
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--cloud", cloud_target, "points on the smooth pieces for the reference")
+      ->check(gwnrt::examples::positive_number());
+  app.add_option("--max-lines", max_lines, "at most this many traced lines for the cloud")
+      ->check(gwnrt::examples::positive_number());
   app.add_option("--smooth-share", smooth_share,
                  "share of the sample points offset from smooth pieces (the rest from sheets, by area)")
       ->check(CLI::Range(0.0, 1.0));

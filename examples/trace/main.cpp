@@ -14,6 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_checks.h"
 #include "csv_writer.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
@@ -132,7 +133,7 @@ int main(int argc, char** argv) {
   app.add_option("--beta", options.beta, "Accuracy of the multipole evaluation of w mod 1")->capture_default_str();
   app.add_flag("--exact", options.exact, "Evaluate w mod 1 by the brute-force double sum (slow reference)");
   app.add_option("--device", device, "Where to trace")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
   CLI11_PARSE(app, argc, argv);
