@@ -35,5 +35,19 @@ TEST_P(SdfStudyCli, HarnackBoundNeverExceedsTheReference) {
 
 INSTANTIATE_TEST_SUITE_P(Meshes, SdfStudyCli, ::testing::Values("bunny_holes.obj", "teapot.obj"));
 
+// Issue 15 item 16: --smooth-share nan was accepted (CLI11's Range lets nan through), and a
+// positive count of 0 answered with a 300-digit range.
+TEST(SdfStudyCliArguments, OutOfRangeValuesAreRefusedPlainly) {
+  const std::string binary = test::example_binary("gwnrt-sdf-study");
+  if (binary.empty()) GTEST_SKIP() << "gwnrt-sdf-study not built next to the tests";
+  for (const std::string args : {" --smooth-share nan", " --smooth-share 1.5", " --points 0", " --beta nan"}) {
+    const test::RunResult r = test::run_program(binary, test::quote(test::data_path("bunny_holes.obj")) + args);
+    ASSERT_TRUE(r.exited) << args;
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.err.find("must be"), std::string::npos) << args << ": " << r.err;
+    EXPECT_EQ(r.err.find("17976931"), std::string::npos) << args << ": " << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace gwnrt

@@ -25,4 +25,18 @@ inline CLI::Validator positive_number() {
       "> 0");
 }
 
+// A share in [0, 1]; CLI11's Range(0.0, 1.0) let nan through.
+inline CLI::Validator unit_interval() {
+  return CLI::Validator(
+      [](std::string& text) {
+        double v = 0;
+        const char* const end = text.data() + text.size();
+        const auto r = std::from_chars(text.data(), end, v);
+        if (r.ec != std::errc() || r.ptr != end || !(v >= 0 && v <= 1))
+          return "must be a number in [0, 1], got '" + text + "'";
+        return std::string();
+      },
+      "in [0, 1]");
+}
+
 }  // namespace gwnrt::examples

@@ -187,7 +187,12 @@ int main(int argc, char** argv) {
   if (integrator == "path") {
     // Scene files and the default scene bring their own camera and settings; what is given here
     // overrides them.
-    if (spp < 0 || max_depth < 0) return fail("--spp and --max-depth must be at least 1");
+    // 0 and negative values are refused when given (issue 15, item 15): leaving an option out is
+    // how the scene's value is kept.
+    if (app.count("--spp") && spp < 1) return fail("--spp must be at least 1 (leave it out for the scene's)");
+    if (app.count("--max-depth") && max_depth < 1)
+      return fail("--max-depth must be at least 1 (leave it out for the scene's)");
+    if (app.count("--seed") && seed < 0) return fail("--seed must be 0 or more (leave it out for the scene's)");
     gwnrt::render::PathJob job;
     job.input = mesh_path;
     job.output = output_path;

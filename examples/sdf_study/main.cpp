@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
       ->check(gwnrt::examples::positive_number());
   app.add_option("--smooth-share", smooth_share,
                  "share of the sample points offset from smooth pieces (the rest from sheets, by area)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(gwnrt::examples::unit_interval());
   app.add_option("--check-triangles", check_triangles, "triangles whose sheet classification is checked")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--brute-points", brute_points, "points whose sheet distance is checked by brute force")
