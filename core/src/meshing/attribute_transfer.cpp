@@ -8,24 +8,18 @@
 #include <array>
 #include <bit>
 #include <cstring>
-#include <numeric>
 #include <tuple>
 
 #include <tbb/parallel_sort.h>
 
 #include "gwnrt/meshing/extract_surface.h"
+#include "meshing/disjoint_sets.h"
 #include "meshing/host_backend.h"
 
 namespace gwnrt {
 namespace {
 
 constexpr uint32_t kDropped = 0xffffffffu;
-
-// Union-find over triangles, with path halving.
-uint32_t find_root(std::vector<uint32_t>& parent, uint32_t i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
 
 // The bits of an edge's two ends (position, UV), lower end first, and its triangle: edges with
 // equal keys join their triangles' charts.
@@ -62,17 +56,13 @@ std::vector<uint32_t> uv_charts(const Mesh& mesh) {
     }
   });
   tbb::parallel_sort(edges.begin(), edges.end(), [](const ChartEdge& a, const ChartEdge& b) { return a.key < b.key; });
-  std::vector<uint32_t> parent(n);
-  std::iota(parent.begin(), parent.end(), 0u);
-  for (size_t i = 1; i < edges.size(); ++i) {
-    if (edges[i].key != edges[i - 1].key) continue;
-    const uint32_t a = find_root(parent, edges[i].triangle), b = find_root(parent, edges[i - 1].triangle);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
+  DisjointSets sets(n);
+  for (size_t i = 1; i < edges.size(); ++i)
+    if (edges[i].key == edges[i - 1].key) sets.unite(edges[i].triangle, edges[i - 1].triangle);
   std::vector<uint32_t> chart(n);
   uint32_t charts = 0;
   for (size_t t = 0; t < n; ++t) {
-    const uint32_t root = find_root(parent, uint32_t(t));
+    const uint32_t root = sets.find(uint32_t(t));
     chart[t] = root == t ? charts++ : chart[root];  // the root is the chart's lowest triangle
   }
   return chart;

@@ -23,6 +23,7 @@
 #include "gwnrt/field/distance.h"
 #include "gwnrt/geometry/bvh.h"
 #include "gwnrt/geometry/triangle_tree.h"
+#include "meshing/disjoint_sets.h"
 #include "message.h"
 
 namespace gwnrt {
@@ -50,32 +51,6 @@ Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
     return {StatusCode::kInvalidArgument, cat(where, ": more than 1431655765 triangles")};
   return Status::Ok();
 }
-
-// Union-find over 32-bit ids, by path halving; the smaller root wins so the result does not
-// depend on the order of the unions.
-class DisjointSets {
- public:
-  explicit DisjointSets(size_t n) : parent_(n) {
-    for (size_t i = 0; i < n; ++i) parent_[i] = uint32_t(i);
-  }
-  uint32_t find(uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return;
-    if (a < b) std::swap(a, b);
-    parent_[a] = b;
-  }
-
- private:
-  std::vector<uint32_t> parent_;
-};
 
 // Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get the id of their
 // group in lexicographic order. Returns the number of distinct positions.
