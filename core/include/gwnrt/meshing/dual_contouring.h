@@ -338,15 +338,11 @@ GWNRT_HD inline int cell_inside_mask(const SparseGridView& view, uint64_t item, 
   return int(mask);
 }
 
-// The inside mask of any cell with a slot, -1 where a corner is not evaluated.
+// The inside mask of any cell in a block with a slot, -1 beyond the grid or where a corner is not
+// evaluated.
 GWNRT_HD inline int inside_mask_at(const SparseGridView& view, const GridCoord& cell) {
-  uint32_t mask = 0;
-  for (int k = 0; k < kCellCorners; ++k) {
-    const float f = view.corner_value_at({cell.x + (k & 1), cell.y + ((k >> 1) & 1), cell.z + ((k >> 2) & 1)});
-    if (f != f) return -1;
-    mask |= uint32_t(is_inside(f)) << k;
-  }
-  return int(mask);
+  const uint64_t item = view.item_of(cell, 0);
+  return item == ~uint64_t(0) ? -1 : cell_inside_mask(view, item, cell);
 }
 
 // The faces of a cell whose pairing is flipped (visit_face_segments): those with a tunnel through
