@@ -20,8 +20,11 @@
 #include <vector>
 
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/mesh_writer.h"
+#include "gwnrt/io/read_file.h"
+#include "mesh_files.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -30,181 +33,15 @@ namespace {
 namespace fs = std::filesystem;
 
 using test::data_path;
+using test::kSmallObj;
+using test::num;
+using test::PlyBody;
+using test::PlyTypes;
+using test::Small;
+using test::small_ply;
 
-// Shortest text that reads back to the same float, so text formats round-trip exactly.
-std::string num(float v) {
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
-std::string num(double v) {
-  char buf[40];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
-class TempFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::random_device rd;
-    // ctest may run tests of several build trees at once; a random suffix keeps them apart.
-    dir_ = fs::path(::testing::TempDir()) /
-           (std::string("gwnrt_mesh_io_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(rd()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  std::string write(const std::string& name, std::string_view bytes) const {
-    const fs::path p = dir_ / name;
-    // Replacing rather than truncating: ext4 flushes a truncated-and-rewritten file to disk
-    // on close, which made the many rewrites below take seconds.
-    std::error_code ec;
-    fs::remove(p, ec);
-    std::ofstream f(p, std::ios::binary);
-    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    f.close();
-    EXPECT_TRUE(f.good()) << p;
-    return p.string();
-  }
-
-  fs::path dir_;
-};
-
-// ---------------------------------------------------------------------------------------
-// The small reference mesh: a triangle, a quad, a pentagon and another triangle.
-
-struct Small {
-  std::vector<vec3> positions = {{0, 0, 0},      {1.5f, 0, 0},     {1.5f, 2.25f, 0}, {0, 2.25f, -0.75f},
-                                 {-1, 1, 3.25f}, {0.5f, -0.5f, 1}, {2, 1, -2.5f}};
-  std::vector<std::vector<uint32_t>> faces = {{0, 1, 2}, {0, 2, 3, 4}, {1, 5, 6, 2, 3}, {4, 3, 6}};
-  std::vector<uvec3> triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {1, 5, 6}, {1, 6, 2}, {1, 2, 3}, {4, 3, 6}};
-};
-
-// Writes PLY bodies in any of the three encodings with any scalar type.
-class PlyBody {
- public:
-  explicit PlyBody(std::string_view format) : ascii_(format == "ascii"), big_(format == "binary_big_endian") {}
-
-  void put(std::string_view type, double v) {
-    if (ascii_) {
-      if (!text_.empty() && text_.back() != '\n') text_ += ' ';
-      if (type == "float" || type == "float32") {
-        text_ += num(static_cast<float>(v));
-      } else if (type == "double" || type == "float64") {
-        text_ += num(v);
-      } else {
-        text_ += std::to_string(static_cast<long long>(v));
-      }
-      return;
-    }
-    if (type == "char" || type == "int8") return bin(static_cast<int8_t>(v));
-    if (type == "uchar" || type == "uint8") return bin(static_cast<uint8_t>(v));
-    if (type == "short" || type == "int16") return bin(static_cast<int16_t>(v));
-    if (type == "ushort" || type == "uint16") return bin(static_cast<uint16_t>(v));
-    if (type == "int" || type == "int32") return bin(static_cast<int32_t>(v));
-    if (type == "uint" || type == "uint32") return bin(static_cast<uint32_t>(v));
-    if (type == "float" || type == "float32") return bin(static_cast<float>(v));
-    if (type == "double" || type == "float64") return bin(v);
-    ADD_FAILURE() << "bad type " << type;
-  }
-
-  void end_element() {
-    if (ascii_) text_ += '\n';
-  }
-
-  const std::string& bytes() const { return text_; }
-
- private:
-  template <class T>
-  void bin(T x) {
-    char b[sizeof(T)];
-    std::memcpy(b, &x, sizeof(T));
-    if (big_ != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
-    text_.append(b, sizeof(T));
-  }
-
-  bool ascii_;
-  bool big_;
-  std::string text_;
-};
-
-struct PlyTypes {
-  std::string xyz = "float";
-  std::string count = "uchar";
-  std::string index = "int";
-  std::string list_name = "vertex_indices";
-  std::string eol = "\n";
-};
-
-// The mesh with distractions: an unknown element before and after, extra scalar and list
-// properties on vertices, and extra properties on both sides of the face list.
-std::string small_ply(std::string_view format, const std::vector<vec3>& pos, const PlyTypes& t = {}) {
-  const Small s;
-  std::string h;
-  auto line = [&](const std::string& l) { h += l + t.eol; };
-  line("ply");
-  line("format " + std::string(format) + " 1.0");
-  line("comment written by test_mesh_io");
-  line("obj_info distractions included");
-  line("element material 2");
-  line("property uchar r");
-  line("property list uchar int ids");
-  line("element vertex " + std::to_string(pos.size()));
-  line("property " + t.xyz + " x");
-  line("property float nx");
-  line("property " + t.xyz + " y");
-  line("property uchar red");
-  line("property " + t.xyz + " z");
-  line("property list uchar float extra");
-  line("element face " + std::to_string(s.faces.size()));
-  line("property uchar flags");
-  line("property list " + t.count + " " + t.index + " " + t.list_name);
-  line("property double quality");
-  line("element edge 2");
-  line("property int vertex1");
-  line("property int vertex2");
-  line("end_header");
-
-  PlyBody b(format);
-  for (int m = 0; m < 2; ++m) {
-    b.put("uchar", 7 + m);
-    b.put("uchar", m + 1);
-    for (int k = 0; k <= m; ++k) b.put("int", -5 * k);
-    b.end_element();
-  }
-  for (size_t i = 0; i < pos.size(); ++i) {
-    b.put(t.xyz, pos[i].x);
-    b.put("float", 0.25);
-    b.put(t.xyz, pos[i].y);
-    b.put("uchar", 200);
-    b.put(t.xyz, pos[i].z);
-    b.put("uchar", i % 3);
-    for (size_t k = 0; k < i % 3; ++k) b.put("float", 1.5 * k);
-    b.end_element();
-  }
-  for (const auto& f : s.faces) {
-    b.put("uchar", 1);
-    b.put(t.count, static_cast<double>(f.size()));
-    for (uint32_t v : f) b.put(t.index, v);
-    b.put("double", 0.125);
-    b.end_element();
-  }
-  for (int e = 0; e < 2; ++e) {
-    b.put("int", e);
-    b.put("int", e + 1);
-    b.end_element();
-  }
-  std::string body = b.bytes();
-  if (format == "ascii" && t.eol != "\n") {
-    std::string converted;
-    for (char c : body) converted += c == '\n' ? t.eol : std::string(1, c);
-    body = converted;
-  }
-  return h + body;
-}
+// Each test's files in a directory of its own (test::TempDirTest).
+class TempFiles : public test::TempDirTest {};
 
 void expect_mesh(const Mesh& m, const std::vector<vec3>& pos, const std::vector<uvec3>& tris) {
   ASSERT_EQ(m.positions.size(), pos.size());
@@ -311,33 +148,6 @@ TEST_F(TempFiles, DragonRoundTrips) {
 
 // ---------------------------------------------------------------------------------------
 // One mesh, every encoding
-
-const char* const kSmallObj =
-    "# the small mesh, with every statement a reader must tolerate\r\n"
-    "mtllib small.mtl\r\n"
-    "o small\r\n"
-    "\r\n"
-    "v 0 0 0 1.0\r\n"
-    "v 1.5 0 0 0.1 0.2 0.3\r\n"
-    "v +1.5 2.25 0\r\n"
-    "v 0 2.25e0 -0.75\r\n"
-    "\tv  -1   1 3.25  \r\n"
-    "v 0.5 -0.5 1\r\n"
-    "v 2 1 -2.5 # trailing comment\r\n"
-    "vt 0 0\r\n"
-    "vt 1 0\r\n"
-    "vn 0 0 1\r\n"
-    "vp 0.5\r\n"
-    "g part\r\n"
-    "s off\r\n"
-    "usemtl red\r\n"
-    "f 1 2 3\r\n"
-    "f 1/1 3/2 4/1 5/2\r\n"
-    "f -6//1 6//1 7//1 3//1 4//1\r\n"
-    "f 5/1/1 4/2/1 -1/1/1 # relative index\r\n"
-    "l 1 2\r\n"
-    "p 1\r\n"
-    "unknownkeyword 1 2 3";  // no final newline
 
 TEST_F(TempFiles, SmallObj) {
   const Small ref;
@@ -1048,6 +858,113 @@ TEST_F(TempFiles, UnknownObjStatementsAreReported) {
   EXPECT_NE(r.warnings.find("line 3: 'vv'"), std::string::npos) << r.warnings;
   ASSERT_TRUE(load_mesh(write("known.obj", "o x\ns 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\np 1\nf 1 2 3\n"), m, &r).ok());
   EXPECT_TRUE(r.warnings.empty()) << r.warnings;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading within limits (issue 15, item 3): a stream that never ends, a file beyond memory.
+
+// /dev/zero under a mesh file's name grew the read buffer until memory ran out; now the read
+// stops at the mesh readers' line limit, naming the file and the line. The PLY header is text too.
+TEST_F(TempFiles, StreamThatNeverEndsStopsAtTheLineLimit) {
+  for (const char* name : {"zero.obj", "zero.ply"}) {
+    const std::string path = (dir_ / name).string();
+    fs::create_symlink("/dev/zero", path);
+    Mesh m;
+    const Status s = load_mesh(path, m);
+    EXPECT_EQ(s.code(), StatusCode::kParseError) << s.message();
+    EXPECT_EQ(s.message().rfind(path + ":1: line longer than 64.0 MiB", 0), 0u) << s.message();
+  }
+}
+
+// A binary PLY body is not text: a long run without a newline byte there is data, while the same
+// run in an ASCII body is a line (ReadLimits::text_end, from the header's format line).
+TEST_F(TempFiles, LineLimitStopsAtABinaryBody) {
+  ReadLimits limits;
+  limits.max_line_bytes = 64;
+  limits.text_end = [](std::string_view head) -> size_t {
+    const size_t end = head.find("END\n");
+    return end == std::string_view::npos ? kTextNotEnded : end + 4;
+  };
+  std::string data;
+  const std::string body(1000, 'b');
+  EXPECT_TRUE(read_file(write("binary.bin", "header\nEND\n" + body), data, limits).ok());
+  EXPECT_EQ(data, "header\nEND\n" + body);
+  limits.text_end = nullptr;
+  const std::string text = write("text.txt", "header\nEND\n" + body);
+  const Status s = read_file(text, data, limits);
+  EXPECT_EQ(s.code(), StatusCode::kParseError);
+  EXPECT_EQ(s.message().rfind(text + ":3: line longer than 64 B", 0), 0u) << s.message();
+  // The limit is on each line, a complete one too, wherever the buffer's chunks end.
+  const std::string long_line = write("long.txt", "a\n" + std::string(65, 'x') + "\nb\n");
+  EXPECT_EQ(read_file(long_line, data, limits).message().rfind(long_line + ":2: line longer", 0), 0u);
+  limits.max_line_bytes = 65;
+  EXPECT_TRUE(read_file(long_line, data, limits).ok());
+}
+
+// The same for load_mesh's PLY reader: a binary body of more than the line limit without a
+// newline byte (6 million vertices at the origin: float zeros) loads, the header being the only
+// text it checks.
+TEST_F(TempFiles, BinaryPlyBodyIsNotLineChecked) {
+  constexpr uint32_t kVertices = 6'000'000;
+  ASSERT_GT(uint64_t(kVertices) * 12, kMaxMeshLineBytes);
+  std::string file = ply_header("binary_little_endian", int(kVertices), 1);
+  const size_t header = file.size();
+  file.resize(header + size_t(kVertices) * 12, '\0');
+  const float one = 1.0f;                        // 0x3f800000: no newline byte either
+  std::memcpy(&file[header + 12], &one, 4);      // vertex 1 = (1, 0, 0)
+  std::memcpy(&file[header + 24 + 4], &one, 4);  // vertex 2 = (0, 1, 0)
+  const char face[13] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0};
+  file.append(face, sizeof face);
+  ASSERT_EQ(file.find('\n', header), std::string::npos);
+  Mesh m;
+  const Status s = load_mesh(write("long_body.ply", file), m);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(m.positions.size(), kVertices);
+  EXPECT_EQ(m.positions[2], vec3(0, 1, 0));
+  EXPECT_EQ(m.triangles, std::vector<uvec3>{uvec3(0, 1, 2)});
+}
+
+// The total: a stream read stops one byte past the limit (the memory available by default), and a
+// regular file larger than it is refused before any of it is read.
+TEST_F(TempFiles, ReadStopsAtTheSizeLimit) {
+  ReadLimits limits;
+  limits.max_line_bytes = std::numeric_limits<uint64_t>::max();
+  limits.max_bytes = 1 << 20;
+  std::string data;
+  Status s = read_file("/dev/zero", data, limits);
+  EXPECT_EQ(s.code(), StatusCode::kOutOfMemory);
+  EXPECT_EQ(s.message(),
+            "/dev/zero: more than the read limit of 1.0 MiB read without reaching the end (a stream "
+            "that does not end?)");
+  limits.max_bytes = 100;
+  const std::string big = write("big.txt", std::string(101, 'x'));
+  s = read_file(big, data, limits);
+  EXPECT_EQ(s.code(), StatusCode::kOutOfMemory);
+  EXPECT_EQ(s.message(), big + ": the file is 101 B, more than the read limit of 100 B");
+  limits.max_bytes = 101;
+  EXPECT_TRUE(read_file(big, data, limits).ok());
+  EXPECT_EQ(data.size(), 101u);
+}
+
+TEST(Memory, AvailableAndChecks) {
+  const uint64_t available = available_memory_bytes();
+  EXPECT_GT(available, 0u);
+  // A size no machine has is refused, saying what it would need and what there is.
+  const Status s = check_memory(saturating_product(uint64_t(1) << 40, uint64_t(1) << 40), "the test's array");
+  if (available != kUnknownMemory) {
+    EXPECT_EQ(s.code(), StatusCode::kOutOfMemory);
+    EXPECT_EQ(s.message().rfind("the test's array would need 16 EiB or more of memory, more than the ", 0), 0u)
+        << s.message();
+  }
+  EXPECT_TRUE(check_memory(1, "a byte").ok());
+  EXPECT_EQ(saturating_product(uint64_t(1) << 32, uint64_t(1) << 32), std::numeric_limits<uint64_t>::max());
+  EXPECT_EQ(saturating_product(uint64_t(1) << 31, uint64_t(1) << 32), uint64_t(1) << 63);
+  EXPECT_EQ(saturating_sum(std::numeric_limits<uint64_t>::max(), 1), std::numeric_limits<uint64_t>::max());
+  EXPECT_EQ(memory_size_text(0), "0 B");
+  EXPECT_EQ(memory_size_text(1023), "1023 B");
+  EXPECT_EQ(memory_size_text(1536), "1.5 KiB");
+  EXPECT_EQ(memory_size_text(uint64_t(3) << 30), "3.0 GiB");
+  EXPECT_EQ(memory_size_text(uint64_t(5) << 40), "5.0 TiB");
 }
 
 }  // namespace

@@ -405,5 +405,58 @@ TEST_F(QueryCliTest, CudaDeviceNeverCrashes) {
   }
 }
 
+// Issue 15, item 3: a points file that never ends a line (/dev/zero, as a file or on standard
+// input) stopped the program only when memory ran out; now reading stops at the line limit, named.
+TEST_F(QueryCliTest, PointStreamsThatNeverEndStopAtTheLineLimit) {
+  const RunResult file = run_query(binary_, quote(mesh_path()) + " --points /dev/zero");
+  const RunResult in = run_query(binary_, quote(mesh_path()) + " --points -", "/dev/zero");
+  for (const RunResult* r : {&file, &in}) {
+    ASSERT_TRUE(r->exited);
+    EXPECT_EQ(r->exit_code, 1);
+    EXPECT_NE(r->err.find(":1: line longer than 1.0 MiB"), std::string::npos) << r->err;
+    EXPECT_TRUE(r->out.empty());
+  }
+  EXPECT_NE(file.err.find("/dev/zero:1:"), std::string::npos) << file.err;
+  EXPECT_NE(in.err.find("<stdin>:1:"), std::string::npos) << in.err;
+}
+
+// A bad token is quoted short and printable in the message: it was copied whole, binary bytes and
+// all (a megabyte of garbage made a megabyte of message).
+TEST_F(QueryCliTest, BadTokensAreQuotedShortAndPrintable) {
+  const std::string points = temp_path("garbage_points.txt");
+  std::ofstream(points, std::ios::binary) << "0 0 0\n1 \x01\x02" << std::string(5000, 'z') << " 2\n";
+  const RunResult r = run_query(binary_, quote(mesh_path()) + " --points " + quote(points));
+  std::remove(points.c_str());
+  ASSERT_TRUE(r.exited);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(points + ":2: not a number: '??" + std::string(38, 'z') + "...'"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 300u);
+  for (const char c : r.err) EXPECT_TRUE(c == '\n' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f));
+}
+
+// The same for a mesh: /dev/zero under a mesh file's name stops at the mesh readers' line limit.
+TEST_F(QueryCliTest, MeshStreamThatNeverEndsStopsAtTheLineLimit) {
+  const std::string zero = temp_path("zero.obj");
+  fs::create_symlink("/dev/zero", zero);
+  const RunResult r = run_query(binary_, quote(zero) + " --points " + quote(probe_points_path()));
+  fs::remove(zero);
+  ASSERT_TRUE(r.exited);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(zero + ":1: line longer than 64.0 MiB"), std::string::npos) << r.err;
+}
+
+// Issue 15, item 11: an OBJ statement nobody knows is a warning (said whether or not stderr is a
+// terminal: it may be a mistyped vertex), and the query still runs.
+TEST_F(QueryCliTest, UnknownObjStatementsAreWarnedAbout) {
+  const std::string mesh = temp_path("unknown.obj");
+  std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nvv 0 1 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  const RunResult r = run_query(binary_, quote(mesh) + " --points " + quote(probe_points_path()));
+  std::remove(mesh.c_str());
+  ASSERT_TRUE(r.exited);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gwnrt-query: " + mesh + ": warning: 1 line with an unknown statement"), std::string::npos)
+      << r.err;
+}
+
 }  // namespace
 }  // namespace gwnrt

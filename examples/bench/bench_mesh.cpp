@@ -28,8 +28,10 @@
 #endif
 
 #include "cli_checks.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_quality.h"
+#include "gwnrt/trace/ray.h"
 #include "load_model.h"
 #include "program.h"
 
@@ -112,6 +114,8 @@ Row run_gwnrt(const GwnModel& model, MeshingMethod method, uint32_t resolution, 
   MeshingOptions options;
   options.resolution = resolution;
   options.method = method;
+  // Refused with what it would need, rather than killed, beyond the memory available.
+  options.memory_budget = std::min(options.memory_budget, available_memory_bytes());
   SurfaceMesh out;
   MeshingStats stats;
   const auto t0 = clock_type::now();
@@ -359,6 +363,16 @@ int main(int argc, char** argv) try {
   app.add_option("--json", json_path, "also write every row and the model build times to this JSON file");
   CLI11_PARSE(app, argc, argv);
   settings.self_intersections = !no_self;
+  {
+    // The distance measurements' arrays per sample (mesh_quality.h): a point on the output and its
+    // distance, a ray, its list of hits and at least one hit (a position and a normal).
+    const uint64_t per_sample =
+        sizeof(vec3) + sizeof(float) + sizeof(Ray) + sizeof(std::vector<vec3>) + 2 * sizeof(vec3);
+    if (Status s = check_memory(saturating_product(settings.samples, per_sample),
+                                "--samples " + std::to_string(settings.samples));
+        !s.ok())
+      return examples::fail(kProgram, s.message());
+  }
 
   if (meshes.empty()) {
     for (const char* name : {"bunny.obj", "bunny_holes.obj"})
@@ -371,9 +385,8 @@ int main(int argc, char** argv) try {
           "../shared/meshes/dragon_vrip_res2.ply.gz > %s`)\n",
           kDragon, kDragon);
   }
-  // A missing file fails now, not after the meshes before it have run.
-  for (const std::string& path : meshes)
-    if (!std::filesystem::is_regular_file(path)) return examples::fail(kProgram, path + ": no such file");
+  if (const std::string bad = examples::first_bad_input_file(meshes); !bad.empty())
+    return examples::fail(kProgram, bad);
 
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
@@ -403,6 +416,8 @@ int main(int argc, char** argv) try {
       failed = true;
       continue;
     }
+    std::fflush(stdout);  // the warning (stderr) after the tables before it
+    examples::print_load_warnings(kProgram, path, loaded.report);
     MeshSummary m;
     m.path = path;
     m.triangles = model.mesh().triangles.size();

@@ -18,7 +18,9 @@
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
+#include "load_model.h"
 #include "point_mix.h"
 #include "program.h"
 
@@ -86,6 +88,12 @@ int main(int argc, char** argv) {
   app.add_option("--json", json_path, "also write every row and the build timings to this JSON file");
   CLI11_PARSE(app, argc, argv);
 
+  // Checked before the mesh is loaded: the points, their subset for the brute force, and the two
+  // result arrays.
+  if (Status s = check_memory(saturating_product(count, 2 * sizeof(vec3) + 2 * sizeof(PointResult)),
+                              "--points " + std::to_string(count));
+      !s.ok())
+    return examples::fail(kProgram, s.message());
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
 
@@ -93,6 +101,7 @@ int main(int argc, char** argv) {
   MeshLoadReport report;
   const auto tl = clock_type::now();
   if (Status s = load_mesh(mesh_path, mesh, &report); !s.ok()) return examples::fail(kProgram, s.message());
+  examples::print_load_warnings(kProgram, mesh_path, report);
   const double load_sec = std::chrono::duration<double>(clock_type::now() - tl).count();
   Aabb box;
   for (const vec3& p : mesh.positions) box.extend(p);
@@ -132,8 +141,9 @@ int main(int argc, char** argv) {
     std::vector<vec3> subset(points.begin(), points.begin() + std::min(brute_count, points.size()));
     brute_sec = time_batch(model, subset, brute, reference);
     if (brute_sec > 0.25 * brute_seconds || subset.size() == points.size()) break;
-    brute_count = std::min(points.size(),
-                           brute_count * std::max<size_t>(2, size_t(0.5 * brute_seconds / std::max(brute_sec, 1e-3))));
+    // In double: a budget of 1e39 s would overflow the count's integer arithmetic.
+    const double grown = double(brute_count) * std::max(2.0, 0.5 * brute_seconds / std::max(brute_sec, 1e-3));
+    brute_count = size_t(std::min(double(points.size()), grown));
   }
   const size_t brute_n = reference.size();
   std::vector<Row> rows;

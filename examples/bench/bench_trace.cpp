@@ -42,6 +42,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
 #include "load_model.h"
 #include "program.h"
@@ -259,12 +260,22 @@ int main(int argc, char** argv) {
   app.add_option("--show", show, "disagreeing rays printed per comparison")->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
   if (Status s = validate_trace_options(options); !s.ok()) examples::die(kProgram, s.message());
+  // Checked before allocating, against the arrays each pixel has: its ray, the hits of (a) and (b),
+  // and at most one entry in the check's groups and the step statistics. (Issue 15: 100000 x 100000
+  // ended in std::bad_alloc.)
+  const uint64_t per_pixel = sizeof(Ray) + sizeof(SimpleHit) + sizeof(RayHit) + sizeof(size_t) + sizeof(uint32_t);
+  if (Status s = check_memory(saturating_product(saturating_product(uint64_t(width), uint64_t(height)), per_pixel),
+                              "--width " + std::to_string(width) + " --height " + std::to_string(height) + ": " +
+                                  "the arrays of " + std::to_string(uint64_t(width) * uint64_t(height)) + " rays");
+      !s.ok())
+    examples::die(kProgram, s.message());
 
   if (meshes.empty()) {
     for (const char* name : {"bunny.obj", "bunny_holes.obj", "teapot.obj"})
       meshes.push_back(std::string(GWNRT_DATA_DIR) + "/" + name);
     if (std::filesystem::exists("/tmp/dragon_vrip.ply")) meshes.push_back("/tmp/dragon_vrip.ply");
   }
+  if (const std::string bad = examples::first_bad_input_file(meshes); !bad.empty()) examples::die(kProgram, bad);
 
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
@@ -280,6 +291,7 @@ int main(int argc, char** argv) {
     GwnModel model;
     examples::ModelLoad loaded;
     if (Status s = examples::load_model(path, model, loaded); !s.ok()) examples::die(kProgram, s.message());
+    examples::print_load_warnings(kProgram, path, loaded.report);
     const MeshLoadReport& report = loaded.report;
     const double load_sec = loaded.load_seconds, build_sec = loaded.build_seconds;
     const ModelView view = model_view(model);

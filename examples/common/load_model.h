@@ -1,7 +1,9 @@
-// Loading a mesh file and building its GwnModel, timed: the start of every command-line program.
+// Loading a mesh file and building its GwnModel, timed, and saying what loading skipped: the start
+// of every command-line program.
 #pragma once
 
 #include <chrono>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -31,6 +33,14 @@ inline Status load_model(const std::string& path, GwnModel& model, ModelLoad& in
   if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) return {s.code(), path + ": " + s.message()};
   info.build_seconds = seconds_since(t_build);
   return Status::Ok();
+}
+
+// What loading skipped that the user may not expect (MeshLoadReport::warnings: OBJ lines with an
+// unknown statement), as "program: path: warning: ..." on stderr; said whether or not stderr is a
+// terminal, because a skipped line may be a mistyped vertex.
+inline void print_load_warnings(const char* program, const std::string& path, const MeshLoadReport& report) {
+  if (!report.warnings.empty())
+    std::fprintf(stderr, "%s: %s: warning: %s\n", program, path.c_str(), report.warnings.c_str());
 }
 
 }  // namespace gwnrt::examples

@@ -3,11 +3,8 @@
 // would shift every later row of the output against its input.
 #pragma once
 
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <initializer_list>
 #include <string>
 #include <string_view>
@@ -15,6 +12,7 @@
 #include <vector>
 
 #include "gwnrt/hd.h"
+#include "gwnrt/io/read_file.h"
 #include "gwnrt/status.h"
 
 namespace gwnrt::examples {
@@ -23,16 +21,22 @@ namespace point_io_detail {
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
-// Whole-stream reads: point files run to millions of lines, and one buffer is much faster than
-// line-by-line stream extraction.
-inline bool read_all(std::FILE* f, std::string& out) {
-  char buf[1 << 16];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
-  return !std::ferror(f);
+// A token as messages show it, quoted: it may be binary garbage or a megabyte long.
+inline std::string shown(std::string_view token) {
+  constexpr size_t kMax = 40;
+  std::string s = "'";
+  for (size_t i = 0; i < token.size() && i < kMax; ++i) {
+    const auto c = static_cast<unsigned char>(token[i]);
+    s += c >= 0x20 && c < 0x7f ? char(c) : '?';
+  }
+  return s + (token.size() > kMax ? "...'" : "'");
 }
 
 }  // namespace point_io_detail
+
+// A row is a few numbers and perhaps a comment: a longer line is not a points or rays file (or a
+// stream that never ends a line, such as /dev/zero), and reading stops there.
+inline constexpr uint64_t kMaxRowLineBytes = uint64_t(1) << 20;
 
 // Parses `text` as rows of numbers; `source` names it in messages ("<source>:<line>: ...").
 // A row must hold one of `counts` numbers (`layout` describes them in errors); column c may be
@@ -82,14 +86,14 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
         if (r.ec == std::errc() && std::abs(wide) <= 1.0) {
           value = float(wide);
         } else {
-          return {StatusCode::kParseError, where() + "number out of range: '" + std::string(token) + "'"};
+          return {StatusCode::kParseError, where() + "number out of range: " + shown(token)};
         }
       }
       if (r.ec != std::errc() || r.ptr != last) {
-        return {StatusCode::kParseError, where() + "not a number: '" + std::string(token) + "'"};
+        return {StatusCode::kParseError, where() + "not a number: " + shown(token)};
       }
       if (std::isnan(value) || (std::isinf(value) && !infinite_ok(count))) {
-        return {StatusCode::kParseError, where() + "non-finite value: '" + std::string(token) + "'"};
+        return {StatusCode::kParseError, where() + "non-finite value: " + shown(token)};
       }
       values[count++] = value;
     }
@@ -116,28 +120,20 @@ inline Status parse_points(std::string_view text, const std::string& source, std
       });
 }
 
-// The whole of `path`, or of standard input when `path` is "-"; `source` becomes its name.
-inline Status read_text(const std::string& path, const char* what, std::string& text, std::string& source) {
-  using namespace point_io_detail;
-  text.clear();
-  if (path == "-") {
-    source = "<stdin>";
-    if (!read_all(stdin, text)) return {StatusCode::kIoError, "<stdin>: read error"};
-    return Status::Ok();
-  }
-  source = path;
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return {StatusCode::kIoError, path + ": cannot open " + what + ": " + std::strerror(errno)};
-  const bool ok = read_all(f, text);
-  std::fclose(f);
-  if (!ok) return {StatusCode::kIoError, path + ": read error"};
-  return Status::Ok();
+// The whole of `path`, or of standard input when `path` is "-" (whole-stream reads: point files
+// run to millions of lines, and one buffer is much faster than line-by-line extraction), within
+// kMaxRowLineBytes per line and the memory available; `source` becomes its name in messages.
+inline Status read_text(const std::string& path, std::string& text, std::string& source) {
+  source = source_name(path);
+  ReadLimits limits;
+  limits.max_line_bytes = kMaxRowLineBytes;
+  return read_file(path, text, limits);
 }
 
 // Reads points from `path`, or from standard input when `path` is "-".
 inline Status read_points(const std::string& path, std::vector<vec3>& points) {
   std::string text, source;
-  if (Status s = read_text(path, "points file", text, source); !s.ok()) return s;
+  if (Status s = read_text(path, text, source); !s.ok()) return s;
   return parse_points(text, source, points);
 }
 

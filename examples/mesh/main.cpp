@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_checks.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_writer.h"
 #include "gwnrt/meshing/attribute_transfer.h"
 #include "gwnrt/meshing/extract_surface.h"
@@ -165,6 +166,11 @@ int main(int argc, char** argv) {
   if (resolution && *resolution == 0) return fail(kProgram, "--resolution must be at least 1");
   options.method = method == "mc" ? gwnrt::MeshingMethod::kMarchingCubes : gwnrt::MeshingMethod::kDualContouring;
   if (Status s = parse_attributes(attributes, options.attributes); !s.ok()) return fail(kProgram, s.message());
+  // The mesher refuses a grid beyond its budget, saying what it would need; a budget beyond the
+  // memory available would let the kernel kill the process instead (issue 15).
+  const uint64_t available = gwnrt::available_memory_bytes();
+  const bool budget_is_available_memory = available < options.memory_budget;
+  if (budget_is_available_memory) options.memory_budget = available;
   const gwnrt::examples::ThreadLimit thread_limit(threads);
 
   gwnrt::GwnModel model;
@@ -177,8 +183,7 @@ int main(int argc, char** argv) {
                  loaded.report.has_colors ? ", vertex colours" : "", loaded.load_seconds + loaded.build_seconds);
   if (Status a = gwnrt::check_attributes(model.mesh(), options.attributes); !a.ok())
     return fail(kProgram, mesh_path + ": " + a.message());
-  if (!loaded.report.warnings.empty())
-    std::fprintf(stderr, "%s: %s: warning: %s\n", kProgram, mesh_path.c_str(), loaded.report.warnings.c_str());
+  gwnrt::examples::print_load_warnings(kProgram, mesh_path, loaded.report);
   if (!loaded.report.attributes_dropped.empty())
     std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), loaded.report.attributes_dropped.c_str());
 
@@ -193,6 +198,8 @@ int main(int argc, char** argv) {
     gwnrt::examples::ProgressBar bar(done, total, "items");
     s = gwnrt::extract_surface(model, options, out, &stats);
   }
+  if (!s.ok() && s.code() == gwnrt::StatusCode::kOutOfMemory && budget_is_available_memory)
+    return fail(kProgram, s.message() + " (the memory available now)");
   if (!s.ok()) return fail(kProgram, s.message());
   const double mesh_seconds = seconds_since(t0);
   if (!stats.message.empty()) std::fprintf(stderr, "%s: %s\n", kProgram, stats.message.c_str());

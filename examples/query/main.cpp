@@ -22,6 +22,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/sdf/point_query.h"
 #include "load_model.h"
@@ -278,6 +279,7 @@ int main(int argc, char** argv) {
     if (gwnrt::Status s = model.set_sheet_level(level); !s.ok()) return fail(kProgram, s.message());
   }
   const gwnrt::MeshLoadReport& report = loaded.report;
+  gwnrt::examples::print_load_warnings(kProgram, mesh_path, report);
   const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
 
   if (chatty) {
@@ -290,8 +292,6 @@ int main(int argc, char** argv) {
                  model.boundary().segment_count(), model.boundary().segment_count() ? "" : " (closed)", load_seconds);
     if (!report.attributes_dropped.empty())
       std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), report.attributes_dropped.c_str());
-    if (!report.warnings.empty())
-      std::fprintf(stderr, "%s: %s: warning: %s\n", kProgram, mesh_path.c_str(), report.warnings.c_str());
     std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s, sheets %.3f s: %u of %zu triangles)\n",
                  kProgram, build_seconds, model.timings().tree_seconds, model.timings().boundary_seconds,
                  model.timings().sheet_seconds, model.sheet_tree().view().triangle_count, report.triangle_count);
@@ -303,6 +303,13 @@ int main(int argc, char** argv) {
   std::vector<vec3> points;
   if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points); !s.ok()) return fail(kProgram, s.message());
 
+  // Checked before allocating (issue 15): with overcommit a size beyond memory would not fail here
+  // but kill the process later, while it fills the results.
+  if (gwnrt::Status s = gwnrt::check_memory(
+          gwnrt::saturating_product(points.size(), sizeof(PointResult)),
+          gwnrt::source_name(points_path) + ": the results of its " + std::to_string(points.size()) + " points");
+      !s.ok())
+    return fail(kProgram, s.message());
   std::vector<PointResult> results(points.size());
   const auto t_eval = std::chrono::steady_clock::now();
   if (use_cuda) {

@@ -33,6 +33,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/sdf/sheets.h"
 #include "kd_tree.h"
 #include "load_model.h"
@@ -121,6 +122,22 @@ int main(int argc, char** argv) {
   app.add_option("--brute-points", brute_points, "points whose sheet distance is checked by brute force")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  {
+    // Checked before the mesh is loaded, against the arrays each sample point has (its point and
+    // base, reference, float copy, five query kinds' results over it and over the mix, Newton's
+    // and the bound's checks, the band lists) and each cloud point has (it, its copy for the
+    // k-d tree and the tree's index, spacing, area weight and sampling sum).
+    const uint64_t per_point = 2 * sizeof(dvec3) + sizeof(uint8_t) + sizeof(Reference) + 2 * sizeof(vec3) +
+                               10 * sizeof(PointResult) + sizeof(double) + sizeof(float) + 3 * sizeof(double);
+    const uint64_t per_cloud_point =
+        sizeof(CloudPoint) + sizeof(dvec3) + 3 * sizeof(double) + sizeof(uint32_t) + sizeof(uint8_t);
+    const uint64_t bytes =
+        saturating_sum(saturating_product(count, per_point), saturating_product(cloud_target, per_cloud_point));
+    if (Status s =
+            check_memory(bytes, "--points " + std::to_string(count) + " --cloud " + std::to_string(cloud_target));
+        !s.ok())
+      examples::die(kProgram, s.message());
+  }
 
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
@@ -129,6 +146,7 @@ int main(int argc, char** argv) {
   GwnModel model;
   examples::ModelLoad loaded;
   if (Status s = examples::load_model(mesh_path, model, loaded); !s.ok()) examples::die(kProgram, s.message());
+  examples::print_load_warnings(kProgram, mesh_path, loaded.report);
   if (level != model.sheet_level())
     if (Status s = model.set_sheet_level(level); !s.ok()) examples::die(kProgram, s.message());
   const ModelView view = model_view(model);

@@ -2,6 +2,7 @@
 #include <filesystem>
 
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/io/read_file.h"
 #include "io/readers.h"
 #include "io/text.h"
 
@@ -24,7 +25,9 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
             cat(path, ": unsupported mesh file extension '", ext, "' (expected .obj or .ply)")};
   }
   std::string data;
-  if (Status s = io::read_whole_file(path, data); !s.ok()) return s;
+  ReadLimits limits;
+  if (!is_obj) limits.text_end = io::ply_text_end;  // lines are checked in the header and an ASCII body
+  if (Status s = read_file(path, data, limits); !s.ok()) return s;
   // A UTF-8 byte-order mark (some Windows editors write one) is not content: left in, it glued
   // itself to the first keyword and the OBJ reader skipped that line.
   std::string_view content = data;

@@ -221,8 +221,9 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
     }
   }
   if (unknown_statements > 0) {
-    rep.warnings = cat(unknown_statements, " lines with an unknown statement ignored (the first, line ",
-                       first_unknown_line, ": ", quoted(first_unknown), ")");
+    rep.warnings = cat(unknown_statements, unknown_statements == 1 ? " line" : " lines",
+                       " with an unknown statement ignored (the first, line ", first_unknown_line, ": ",
+                       quoted(first_unknown), ")");
   }
   if (vertex_index.max_index > pos.size()) {
     line_no = vertex_index.max_index_line;

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <optional>
 
+#include "gwnrt/io/read_file.h"
 #include "io/readers.h"
 #include "io/text.h"
 
@@ -555,6 +556,23 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
 }
 
 }  // namespace
+
+size_t ply_text_end(string_view head) {
+  if (head.substr(0, 3) == "\xEF\xBB\xBF") head.remove_prefix(3);  // load_mesh drops a BOM
+  string_view format;
+  for (size_t off = 0, line = 0;; ++line) {
+    const size_t nl = head.find('\n', off);
+    if (nl == string_view::npos) return kTextNotEnded;  // only whole lines are read
+    LineTokens tk{head.data() + off, head.data() + nl};
+    off = nl + 1;
+    string_view kw;
+    const bool blank = !tk.next(kw);
+    if (line == 0 && (blank || kw != "ply")) return kAllText;  // not a PLY: read_ply says so
+    if (blank) continue;
+    if (kw == "format" && !tk.next(format)) format = {};
+    if (kw == "end_header") return format == "ascii" ? kAllText : off;
+  }
+}
 
 Status read_ply(const std::string& path, string_view data, Mesh& mesh, MeshLoadReport& rep) {
   PlyHeader h;

@@ -24,4 +24,8 @@ namespace gwnrt::io {
 Status read_obj(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
 Status read_ply(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
 
+// ReadLimits::text_end for a PLY file: where its header ends when the body is binary (kAllText for
+// an ASCII body or a file that is not a PLY; kTextNotEnded before the end_header line).
+size_t ply_text_end(std::string_view head);
+
 }  // namespace gwnrt::io

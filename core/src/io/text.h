@@ -1,5 +1,5 @@
 // What the mesh readers share: strict number parsing (a malformed number is an error, never a
-// 0), line tokens, reading a whole file, and polygon fanning.
+// 0), line tokens and polygon fanning (files are read by gwnrt/io/read_file.h).
 #pragma once
 
 #include <cstdint>
@@ -20,8 +20,6 @@ using std::int64_t;
 using std::string_view;
 using std::uint32_t;
 using std::uint64_t;
-
-// Numbers
 
 // Numbers
 
@@ -79,8 +77,6 @@ inline IntParse parse_int(string_view s, int64_t& out) {
 
 // Text scanning
 
-// Text scanning
-
 inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 // Whitespace-separated tokens of one line.
@@ -96,9 +92,6 @@ struct LineTokens {
     return true;
   }
 };
-
-// The whole file at `path` into `data`; fails naming the file (missing, a directory, unreadable).
-Status read_whole_file(const std::string& path, std::string& data);
 
 inline constexpr uint64_t kMaxVertices = uint64_t(std::numeric_limits<uint32_t>::max()) + 1;
 

@@ -29,7 +29,8 @@ struct MeshLoadReport {
 // texture_t per vertex, or a face texcoord list) and vertex colours (OBJ v x y z r g b; PLY red
 // green blue [alpha], integers scaled to [0, 1]) are kept when every face or vertex has them. Fails, naming the file
 // and the line or element, on malformed content, non-finite coordinates, out-of-range indices and meshes without
-// triangles.
+// triangles; and, as it reads, on a text line longer than kMaxMeshLineBytes (the header of a binary PLY included) or
+// more bytes than the memory available (gwnrt/io/read_file.h): /dev/zero stops there.
 Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report = nullptr);
 
 }  // namespace gwnrt
