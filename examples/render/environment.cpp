@@ -18,11 +18,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <utility>
 
 #include <OpenImageIO/imageio.h>
+
+#include "gwnrt/io/memory.h"
 
 namespace gwnrt::render {
 
@@ -174,6 +178,14 @@ Status Environment::load(const std::string& path, float scale, Environment& out)
     return {StatusCode::kInvalidArgument, path + ": empty image (" + std::to_string(w) + " x " + std::to_string(h) +
                                               ", " + std::to_string(channels) + " channels)"};
   }
+  // Checked before allocating (issue 15, item 3): a header may claim any size. Held at once: the
+  // file's channels, the RGB pixels and the column CDFs, in floats.
+  const uint64_t pixel_count = saturating_product(uint64_t(w), uint64_t(h));
+  if (Status s = check_memory(saturating_product(pixel_count, 4 * (uint64_t(channels) + 3 + 1)),
+                              path + ": the environment image (" + std::to_string(w) + " x " + std::to_string(h) +
+                                  ", " + std::to_string(channels) + " channels)");
+      !s.ok())
+    return s;
   std::vector<float> data(std::size_t(w) * std::size_t(h) * std::size_t(channels));
   if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data())) {
     return oiio_error(path, "cannot read the environment image", in->geterror());
@@ -186,6 +198,19 @@ Status Environment::load(const std::string& path, float scale, Environment& out)
   for (std::size_t k = 0; k < pixels.size(); ++k) {
     const float* p = data.data() + k * std::size_t(channels);
     pixels[k] = channels >= 3 ? Spectrum(p[0], p[1], p[2]) : Spectrum(p[0]);
+  }
+  // Non-finite pixels are dropped (from_pixels); finite ones times the scale must stay a radiance
+  // the path tracer can sum (kMaxRadiance), where float would overflow them to inf and drop them.
+  double brightest = 0.0;
+  for (const Spectrum& p : pixels)
+    for (int c = 0; c < 3; ++c)
+      if (std::isfinite(p[c])) brightest = std::max(brightest, double(p[c]));
+  if (brightest * double(scale) > double(kMaxRadiance)) {
+    char text[96];
+    std::snprintf(text, sizeof text, "its brightest pixel (%g) times the scale (%g) is above %g", brightest,
+                  double(scale), double(kMaxRadiance));
+    return {StatusCode::kInvalidArgument,
+            path + ": " + text + ", the largest radiance whose paths' sums stay finite in float"};
   }
   out = from_pixels(w, h, std::move(pixels), scale);
   return Status::Ok();

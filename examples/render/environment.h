@@ -10,6 +10,13 @@
 
 namespace gwnrt::render {
 
+// The largest radiance a light may have (an emissive material, the environment, its image times
+// its scale, the sun). A pixel sums up to 2^20 samples (spp), each a light's radiance times the
+// path's BSDF-over-pdf ratios; at 1e20 the sum of radiances stays below 1e26, which leaves float
+// (3.4e38) a factor of 1e12 for those ratios. Far above any physical light in any unit (the sun's
+// disc: 1.6e9 cd/m²); beyond it a sample would overflow to inf and be dropped, darkening the image.
+inline constexpr float kMaxRadiance = 1e20f;
+
 // Lat-long mapping: direction (x, y, z), y up; u = atan2(x, -z)/(2π) + 1/2 across, v = acos(y)/π
 // down (row 0 looks straight up).
 //
@@ -34,7 +41,8 @@ class Environment {
   // std::invalid_argument unless width, height > 0 and pixels.size() == width · height.
   static Environment from_pixels(int width, int height, std::vector<Spectrum> pixels, float scale = 1.0f);
   // Any image OpenImageIO reads (EXR, HDR, PNG, ...); a missing file or a bad image fails with
-  // the path and OpenImageIO's message.
+  // the path and OpenImageIO's message, an image larger than the memory available or whose
+  // brightest pixel times `scale` exceeds kMaxRadiance with the path and the numbers.
   static Status load(const std::string& path, float scale, Environment& out);
 
   Spectrum radiance(const vec3& direction) const;  // toward which a ray escapes

@@ -1,13 +1,20 @@
 #include "image_output.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <vector>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 namespace gwnrt::render {
@@ -25,6 +32,20 @@ Status oiio_error(const std::string& path, const std::string& what, std::string 
   // OpenImageIO messages may end in a newline; the caller prints its own.
   while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
   return {StatusCode::kIoError, path + ": " + what + ": " + message};
+}
+
+// Writes `bytes` to `path`, checking the write, the flush and the close: a full disk is often
+// reported only by the last two.
+Status write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
+  errno = 0;
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return {StatusCode::kIoError, path + ": cannot open for writing: " + std::strerror(errno ? errno : EIO)};
+  int error = 0;
+  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) error = errno ? errno : EIO;
+  if (std::fflush(f) != 0 && error == 0) error = errno ? errno : EIO;
+  if (std::fclose(f) != 0 && error == 0) error = errno ? errno : EIO;
+  if (error != 0) return {StatusCode::kIoError, path + ": write failed: " + std::strerror(error)};
+  return Status::Ok();
 }
 
 std::vector<uint8_t> encode_srgb8(const Image& image) {
@@ -66,8 +87,12 @@ Status write_image(const std::string& path, const Image& image, const std::strin
     return {StatusCode::kInvalidArgument, path + ": nothing to write (empty image or fewer than three channels)"};
   }
 
-  std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
+  // Encoded into memory: OpenImageIO's writers do not all report a failed write or close (a PNG
+  // to a full disk "succeeds"), so the bytes are written to the file below, every step checked.
+  OIIO::Filesystem::IOVecOutput encoded;
+  std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path, &encoded);
   if (!out) return oiio_error(path, "cannot create an image writer", OIIO::geterror());
+  if (!out->supports("ioproxy")) return {StatusCode::kInternal, path + ": the image writer cannot encode into memory"};
 
   const bool png = *format == ImageFormat::kPng;
   const int channels = png ? 3 : image.channels();
@@ -95,7 +120,30 @@ Status write_image(const std::string& path, const Image& image, const std::strin
     return s;
   }
   if (!out->close()) return oiio_error(path, "write failed", out->geterror());
-  return Status::Ok();
+  out.reset();
+  return write_bytes(path, encoded.buffer());
+}
+
+uint64_t write_image_bytes_per_pixel(ImageFormat format, int channels) {
+  // PNG: the 8-bit RGB copy and its encoding; EXR: its (compressed) encoding of the floats.
+  return format == ImageFormat::kPng ? 3 + 3 : 4 * uint64_t(channels);
+}
+
+std::optional<std::string> check_writable(const std::string& path) {
+  // O_EXCL: a file made here is known to be ours, and is removed again; an existing one is
+  // opened without truncating it, so that nothing in it changes.
+  int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd >= 0) {
+    ::close(fd);
+    ::unlink(path.c_str());
+    return std::nullopt;
+  }
+  if (errno == EEXIST) fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::close(fd);
+    return std::nullopt;
+  }
+  return path + ": cannot be written: " + std::strerror(errno);
 }
 
 Image tone_mapped(const Image& image) {
@@ -106,7 +154,14 @@ Image tone_mapped(const Image& image) {
       float* q = out.pixel(x, y);
       for (int c = 0; c < 3; ++c) {
         const float v = p[c] > 0.0f ? p[c] : 0.0f;
-        q[c] = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
+        if (v <= 1.0f) {
+          q[c] = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
+        } else {
+          // The same curve divided through by v², so that v² cannot overflow (from v = 1.8e19,
+          // inf / inf made a bright pixel black; issue 15, item 13).
+          const float r = 1.0f / v;
+          q[c] = (2.51f + 0.03f * r) / (2.43f + (0.59f + 0.14f * r) * r);
+        }
       }
     }
   return out;

@@ -8,7 +8,9 @@
 // normal or headlight, with its statistics image.
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <filesystem>
+#include <new>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -41,23 +43,25 @@ std::optional<std::string> check_finite(const char* option, double value) {
   return std::string(option) + " must be a finite number";
 }
 
-// An output path's format, or why it cannot be written: checked before the mesh is loaded so a
-// long render is never thrown away at the end.
+// An output path's format, or why it cannot be written (tried by opening it for writing):
+// checked before the mesh is loaded so a long render is never thrown away at the end.
 std::optional<std::string> check_output_path(const char* option, const std::string& path, bool create_parent) {
   if (!gwnrt::render::image_format_for(path)) {
     return std::string(option) + " " + path +
            ": unknown image extension (supported: " + gwnrt::render::supported_image_extensions() + ")";
   }
   const fs::path parent = fs::path(path).parent_path();
-  if (parent.empty()) return std::nullopt;
   std::error_code ec;
-  if (create_parent) {
+  if (parent.empty()) {
+    // The current directory.
+  } else if (create_parent) {
     fs::create_directories(parent, ec);
     if (ec)
       return std::string(option) + " " + path + ": cannot create directory " + parent.string() + ": " + ec.message();
   } else if (!fs::is_directory(parent, ec)) {
     return std::string(option) + " " + path + ": directory " + parent.string() + " does not exist";
   }
+  if (auto why = gwnrt::render::check_writable(path)) return std::string(option) + " " + *why;
   return std::nullopt;
 }
 
@@ -67,6 +71,20 @@ std::optional<std::string> resolve_output_path(std::string& path, const std::str
   const bool default_output = path.empty();
   if (default_output) path = (fs::path("out") / fs::path(input).stem()).string() + ".png";
   return check_output_path("-o", path, default_output);
+}
+
+// Runs a job: the jobs return Status-checked errors and check sizes before allocating, so an
+// exception here is an allocation that failed anyway (Embree's build, a mesh's model) or a bug;
+// it ends with a message and exit status 1 rather than in std::terminate.
+template <class Job>
+int guarded(Job job) {
+  try {
+    return job();
+  } catch (const std::bad_alloc&) {
+    return fail("out of memory");
+  } catch (const std::exception& e) {
+    return fail(std::string("internal error: ") + e.what());
+  }
 }
 
 std::string command_line(int argc, char** argv) {
@@ -193,6 +211,14 @@ int main(int argc, char** argv) {
     if (app.count("--max-depth") && max_depth < 1)
       return fail("--max-depth must be at least 1 (leave it out for the scene's)");
     if (app.count("--seed") && seed < 0) return fail("--seed must be 0 or more (leave it out for the scene's)");
+    // The first hit's own options would be silently ignored here (`--level 1e39` exited 0): a
+    // scene file sets the surface per GWN object.
+    for (const char* name : {"--shading", "--azimuth", "--elevation", "--fov", "--mode", "--level", "--eps",
+                             "--max-steps", "--beta", "--stats-image"})
+      if (app.count(name))
+        return fail(std::string(name) +
+                    " is an option of --integrator first-hit (a scene file sets the surface and "
+                    "camera of the path tracer)");
     gwnrt::render::PathJob job;
     job.input = mesh_path;
     job.output = output_path;
@@ -208,7 +234,7 @@ int main(int argc, char** argv) {
     job.seed = seed;
     job.aovs = aovs;
     job.threads = threads;
-    return gwnrt::render::run_path_job(job, description);
+    return guarded([&] { return gwnrt::render::run_path_job(job, description); });
   }
 
   if (fs::path(mesh_path).extension() == ".json")
@@ -243,5 +269,5 @@ int main(int argc, char** argv) {
   job.elevation = float(elevation);
   job.fov_degrees = float(fov);
   job.threads = threads;
-  return gwnrt::render::run_first_hit_job(job, description);
+  return guarded([&] { return gwnrt::render::run_first_hit_job(job, description); });
 }

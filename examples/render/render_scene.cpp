@@ -4,6 +4,7 @@
 #include "embree_triangles.h"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <limits>
 
@@ -17,7 +18,35 @@ Status embree_status(RTCDevice device, const std::string& what) {
   return {StatusCode::kInternal, what + ": Embree error " + std::to_string(int(e))};
 }
 
+// Embree's ray.valid() (an assertion that aborts) takes origins and directions whose components
+// are within FLT_LARGE = 1.844e18, and tnear, tfar that are not NaN.
+constexpr float kEmbreeLarge = 1.844e18f;
+
+bool within_embree(const vec3& v) {
+  return std::fabs(v.x) <= kEmbreeLarge && std::fabs(v.y) <= kEmbreeLarge && std::fabs(v.z) <= kEmbreeLarge;
+}
+
+// v / |v|, scaled by its largest component first so that neither tiny vectors (a normal of a
+// triangle 1e-20 across, whose squared length underflows float) nor large ones (an instance's
+// normal matrix with scale factors near 1e-12) lose their direction; zero for a zero or
+// non-finite v.
+vec3 unit(vec3 v) {
+  const float m = std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+  if (!(m > 0.0f) || !std::isfinite(m)) return vec3(0.0f);
+  v /= m;
+  return v / glm::length(v);
+}
+
 }  // namespace
+
+bool RenderScene::valid_ray(const vec3& o, const vec3& d, float tnear, float tfar) const {
+  // Embree's own test, and a direction that is not zero (which Embree would take, but which no
+  // ray of the path tracer can mean).
+  const bool ok = within_embree(o) && within_embree(d) && (d.x != 0.0f || d.y != 0.0f || d.z != 0.0f) &&
+                  !std::isnan(tnear) && !std::isnan(tfar);
+  if (!ok) invalid_rays_.fetch_add(1, std::memory_order_relaxed);
+  return ok;
+}
 
 RenderScene::~RenderScene() {
   if (scene_) rtcReleaseScene(scene_);
@@ -90,7 +119,14 @@ Status RenderScene::build(const SceneDesc& desc) {
       const unsigned id = rtcAttachGeometry(scene_, instance);
       rtcReleaseGeometry(instance);
       if (top_.size() <= id) top_.resize(id + 1);
-      top_[id] = {true, g.material, nullptr, glm::transpose(glm::inverse(glm::mat3(transform)))};
+      // The inverse in double (the scene reader bounds the transform's scale factors and
+      // condition), scaled to entries of order 1: only the normal's direction is wanted.
+      glm::dmat3 normal = glm::transpose(glm::inverse(glm::dmat3(glm::mat3(transform))));
+      double largest = 0.0;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) largest = std::max(largest, std::fabs(normal[c][r]));
+      if (largest > 0.0) normal /= largest;
+      top_[id] = {true, g.material, nullptr, glm::mat3(normal)};
     }
   }
   rtcCommitScene(scene_);
@@ -104,11 +140,14 @@ Status RenderScene::build(const SceneDesc& desc) {
   const Spectrum up = environment_.radiance(vec3(0.0f, 1.0f, 0.0f));
   environment_emits_ = !environment_.is_constant() || up.x > 0.0f || up.y > 0.0f || up.z > 0.0f;
   const Aabb box = scene_bounds(desc);
-  radius_ = box.valid() ? 0.5f * glm::length(box.hi - box.lo) : 1.0f;
+  // In double: the squared diagonal of a tiny (or huge) scene would underflow (overflow) float.
+  radius_ =
+      box.valid() ? float(std::min(0.5 * glm::length(glm::dvec3(box.hi) - glm::dvec3(box.lo)), double(FLT_MAX))) : 1.0f;
   return Status::Ok();
 }
 
 bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfar, SurfaceHit& hit) const {
+  if (!valid_ray(o, d, tnear, tfar)) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh = examples::embree_ray_hit(o, d, tnear, tfar);
@@ -124,7 +163,9 @@ bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfa
     const vec3 a = top.mesh->positions[t.x], b = top.mesh->positions[t.y], c = top.mesh->positions[t.z];
     n = glm::cross(b - a, c - a);
   }
-  n = glm::normalize(n);
+  n = unit(n);
+  // A normal that cannot be normalised (a triangle too small for float): taken as facing the ray.
+  if (n == vec3(0.0f)) n = -d;
   hit.t = rh.ray.tfar;
   hit.position = o + rh.ray.tfar * d;
   hit.normal = n;
@@ -134,6 +175,7 @@ bool RenderScene::intersect(const vec3& o, const vec3& d, float tnear, float tfa
 }
 
 bool RenderScene::occluded(const vec3& o, const vec3& d, float tnear, float tfar) const {
+  if (!valid_ray(o, d, tnear, tfar)) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray = examples::embree_ray_hit(o, d, tnear, tfar).ray;

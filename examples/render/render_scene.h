@@ -7,6 +7,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <atomic>
+#include <cstdint>
 #include <vector>
 
 #include "environment.h"
@@ -46,6 +48,10 @@ class RenderScene {
   bool intersect(const vec3& origin, const vec3& direction, float tnear, float tfar, SurfaceHit& hit) const;
   // Whether anything lies on the segment (tnear, tfar).
   bool occluded(const vec3& origin, const vec3& direction, float tnear, float tfar) const;
+  // Rays intersect() and occluded() refused instead of handing them to Embree (a non-finite or
+  // far-out origin, a non-finite or zero direction, a NaN tnear or tfar): counted as misses.
+  // The scene reader keeps every ray valid, so this is a bug's trace if ever nonzero.
+  uint64_t invalid_rays() const { return invalid_rays_.load(std::memory_order_relaxed); }
 
   const SceneDesc& desc() const { return *desc_; }
   const std::vector<Material>& materials() const { return desc_->materials; }
@@ -74,6 +80,9 @@ class RenderScene {
   bool environment_emits_ = false;
   AreaLights lights_;
   float radius_ = 1.0f;
+  mutable std::atomic<uint64_t> invalid_rays_{0};
+
+  bool valid_ray(const vec3& origin, const vec3& direction, float tnear, float tfar) const;
 };
 
 }  // namespace gwnrt::render

@@ -14,13 +14,25 @@
 //     "meshes": [{"file": "a.obj" | "plane": size, "material": "name", "transform": T}],
 //     "gwn_objects": [{"file": "b.obj", "material": "name", "mode": "gwn" | "solid-angle",
 //                      "level": 0.5, "epsilon": 1e-5, "max_steps": 4096, "beta": 2,
-//                      "instances": [T, ...]}],          // default: one, the identity
+//                      "instances": [T, ...] | "transform": T}],  // default: one, the identity
 //     "environment": {"radiance": [r,g,b]} | {"file": "sky.exr", "scale": 1},
 //     "sun": {"direction": [x,y,z], "radiance": [r,g,b], "angular_radius": 0.00465}
 //   }
 // A transform T is {"translate": [..], "rotate": [axis_x, axis_y, axis_z, degrees],
 // "scale": s | [sx,sy,sz]} (applied scale, then rotate, then translate) or {"matrix": 16
-// numbers, row-major}.
+// numbers, row-major, affine: the last row 0 0 0 1}.
+//
+// Every key is one of those above (a material's keys: those of its type): an unknown or misspelt
+// key is an error naming its JSON location, not ignored, because a typo that silently leaves a
+// default in place (a "radiance" spelt "radiancee", a "scale" on the wrong level) renders a
+// wrong image that nothing explains. Each section has its type (an object, an array), numbers are
+// finite and within float's range, and the values are refused (with their location) where the
+// renderer could not carry them through float arithmetic (scene.cpp says why each limit is what
+// it is): coordinates of the eye, the target and the geometry in world space beyond ±1e12 (so
+// also a plane or a scale that makes them so), a scene smaller than 1e-12 across, an "up" zero or
+// within 0.06 degrees of the view direction, a singular, projective or badly conditioned
+// transform, an instance whose object space would put rays beyond ±1e12, and radiances (emission,
+// environment, sun) above 1e20 or negative.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +43,7 @@
 #include "camera.h"
 #include "environment.h"
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/status.h"
 #include "gwnrt/trace/surface_trace.h"
 
@@ -64,6 +77,13 @@ struct EnvironmentDesc {
   float scale = 1.0f;
 };
 
+// A mesh file the scene read, with what its loader reported (for the program to print the
+// warnings: lines the loader skipped).
+struct LoadedMesh {
+  std::string path;
+  MeshLoadReport report;
+};
+
 struct SceneDesc {
   examples::PinholeCamera camera;  // a scene file's "camera" block through look_at
   RenderSettings render;
@@ -73,13 +93,20 @@ struct SceneDesc {
   std::vector<GwnObjectDesc> gwn_objects;
   EnvironmentDesc environment;
   Sun sun;
+  std::vector<LoadedMesh> loaded_meshes;  // every mesh file read, in order
 };
 
-// Reads a scene file; a bad file fails with its path and the JSON location of the problem.
+// Reads a scene file; a bad file fails with its path and the JSON location of the problem (the
+// line and column where it is not JSON). Throws nothing.
 Status load_scene(const std::string& path, SceneDesc& out);
 
+// The same for a scene file's text, already read; `path` is for messages, and relative mesh and
+// image paths are relative to its directory.
+Status parse_scene(const std::string& text, const std::string& path, SceneDesc& out);
+
 // The default scene for one mesh: the mesh as a GWN object (white diffuse) standing on a grey
-// ground plane, under a soft sky and a sun, seen by a camera that frames it.
+// ground plane, under a soft sky and a sun, seen by a camera that frames it. A mesh whose scene
+// the renderer cannot carry (larger or smaller than the limits above) fails, naming the mesh.
 Status default_scene(const std::string& mesh_path, SceneDesc& out);
 
 // The bounds of everything in the scene (GWN objects by their meshes' boxes, transformed).

@@ -674,5 +674,27 @@ TEST_F(EnvironmentLoad, FailuresNameThePath) {
   std::printf("  garbage file: %s\n", g.message().c_str());
 }
 
+// Issue 15, item 13: an image's pixels times its scale beyond float (a radiance of 1e39 read
+// as inf, then zeroed as non-finite) or beyond what a pixel's sum of samples carries
+// (kMaxRadiance) are refused, naming the file; at the limit the image loads unchanged.
+TEST_F(EnvironmentLoad, Issue15Item13_RadianceBeyondTheLimitIsRefused) {
+  const int w = 4, h = 2;
+  std::vector<float> data(std::size_t(w) * h * 3, 0.5f);
+  data[5] = 1e19f;  // one pixel's blue
+  const std::string path = write_exr("bright.exr", w, h, 3, data);
+  for (const float scale : {11.0f, 1e20f, 3e38f}) {
+    Environment env;
+    const Status s = Environment::load(path, scale, env);
+    EXPECT_FALSE(s.ok()) << scale;
+    EXPECT_NE(s.message().find(path + ": its brightest pixel (1e+19) times the scale"), std::string::npos)
+        << s.message();
+  }
+  Environment env;
+  const Status s = Environment::load(path, 10.0f, env);  // 1e20: the limit itself
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(at_pixel(env, w, h, 0, 1).z, 1e20f);
+  EXPECT_EQ(at_pixel(env, w, h, 0, 0), Spectrum(5.0f));
+}
+
 }  // namespace
 }  // namespace gwnrt::render

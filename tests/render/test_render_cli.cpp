@@ -2,10 +2,15 @@
 // integrator produce images of the asked size; bad input ends in a message and exit code 1.
 #include <OpenImageIO/imageio.h>
 
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "../cli_util.h"
 #include "../test_util.h"
+#include "gwnrt/io/memory.h"
 
 namespace gwnrt {
 namespace {
@@ -91,6 +96,221 @@ TEST_F(RenderCli, ZeroOrNegativeCountsAreRefused) {
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("must be"), std::string::npos) << r.err;
   }
+}
+
+TEST_F(RenderCli, FirstHitOptionsAreRefusedForThePathTracer) {
+  // Issue 15: `--level 1e39` and `--eps 0` exited 0 with the path tracer, which ignored them.
+  for (const std::string args : {" --level 1e39", " --eps 0", " --level 0.3", " --mode solid-angle", " --beta 3"}) {
+    SCOPED_TRACE(args);
+    const test::RunResult r = test::run_program(
+        binary_, test::quote(kScene) + " --width 8 --height 8 -o " + test::quote(test::temp_path("p.png")) + args);
+    ASSERT_TRUE(r.exited);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("is an option of --integrator first-hit"), std::string::npos) << r.err;
+  }
+}
+
+// Writes `text` to a new temporary file named after `name`; returns its path.
+std::string write_temp(const std::string& name, const std::string& text) {
+  const std::string path = test::temp_path(name);
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+// Runs gwnrt-render on `args` (a tiny image, one sample) expecting a refusal: exit status 1, not a
+// signal, and a message naming `words`.
+void expect_refusal(const std::string& binary, const std::string& args, const std::string& words) {
+  SCOPED_TRACE(args);
+  const test::RunResult r = test::run_program(binary, args + " --spp 1 --width 8 --height 6");
+  ASSERT_TRUE(r.exited) << "killed by a signal: " << r.err;
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("gwnrt-render: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+}
+
+// Issue 15, item 1: scenes whose rays used to abort inside Embree (its ray.valid() assertion)
+// end in a message naming the JSON location (scene_checks covers each class in-process).
+TEST_F(RenderCli, Issue15Item1_DegenerateScenesExitWithAMessage) {
+  const std::string bunny = test::data_path("bunny_holes.obj");
+  const std::string out = " -o " + test::quote(test::temp_path("degenerate.png"));
+  for (const auto& [scene, where] : {
+           std::pair{std::string(R"({"camera": {"eye": [0, 0, 5], "up": [0, 0, 0]}})"), "/camera/up"},
+           std::pair{std::string(R"({"camera": {"eye": [0, 5, 0], "up": [0, 1, 0]}})"), "/camera/up"},
+           std::pair{std::string(R"({"camera": {"eye": [0, 1e37, 5]}})"), "/camera/eye"},
+           std::pair{std::string(R"({"meshes": [{"plane": 3e38}]})"), "/meshes/0"},
+           std::pair{std::string(R"({"gwn_objects": [{"file": ")") + bunny +
+                         R"(", "instances": [{"matrix": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,1]}]}]})",
+                     "/gwn_objects/0/instances/0"},
+           std::pair{std::string(R"({"gwn_objects": [{"file": ")") + bunny + R"(", "instances": [{"scale": 1e30}]}]})",
+                     "/gwn_objects/0/instances/0"},
+       }) {
+    const std::string path = write_temp("degenerate.json", scene);
+    expect_refusal(binary_, test::quote(path) + out, path + ": " + where + ": ");
+    std::remove(path.c_str());
+  }
+  // The default scene of a mesh 1e-30 across: its framing used to underflow to a NaN camera.
+  const std::string tiny = write_temp("tiny.obj",
+                                      "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nv 0 0 1e-30\n"
+                                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  expect_refusal(binary_, test::quote(tiny) + out, tiny + ": the default scene for a mesh 1e-30 across");
+  std::remove(tiny.c_str());
+}
+
+// Issue 15, item 2: a number beyond double's range and a scene path that is a directory used to
+// throw through main (std::terminate); now errors naming the file (and the line).
+TEST_F(RenderCli, Issue15Item2_UnreadableScenesExitWithAMessage) {
+  const std::string out = " -o " + test::quote(test::temp_path("unreadable.png"));
+  const std::string big = write_temp("big.json", "{\n  \"camera\": {\"fov\": 1e400}\n}\n");
+  expect_refusal(binary_, test::quote(big) + out, big + ": not valid JSON: at line 2");
+  std::remove(big.c_str());
+  const std::string dir = test::temp_path("dir.json");
+  std::filesystem::create_directories(dir);
+  expect_refusal(binary_, test::quote(dir) + out, dir + ": cannot read: it is a directory");
+  std::filesystem::remove(dir);
+}
+
+// Issue 15, item 12: sections of the wrong type and unknown keys used to be ignored (defaults
+// rendered); now refused, naming the location.
+TEST_F(RenderCli, Issue15Item12_WrongSectionsAndUnknownKeysAreRefused) {
+  const std::string out = " -o " + test::quote(test::temp_path("sections.png"));
+  for (const auto& [scene, where] :
+       {std::pair{R"({"camera": 5})", "/camera: expected an object"},
+        std::pair{R"({"render": []})", "/render: expected an object"},
+        std::pair{R"({"environment": 5})", "/environment: expected an object"},
+        std::pair{R"({"sun": 5})", "/sun: expected an object"},
+        std::pair{R"({"sun": {"radiance": [1, 1, 1], "angle": 0.1}})", "/sun/angle: unknown key"}}) {
+    const std::string path = write_temp("sections.json", scene);
+    expect_refusal(binary_, test::quote(path) + out, path + ": " + where);
+    std::remove(path.c_str());
+  }
+}
+
+// Issue 15, item 13: an emission above 1.8e19 used to render black in PNG (the tone curve's
+// v² overflowed to inf / inf), and 3e38 also overflowed the pixel's sum of samples. Now the
+// largest radiance allowed (1e20) renders white, and 3e38 is refused.
+TEST_F(RenderCli, Issue15Item13_BrightestEmissionRendersWhite) {
+  // The camera looks straight down at an emissive plane that fills the view.
+  const std::string scene = R"({"camera": {"eye": [0, 1, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov": 30},
+      "materials": {"lamp": {"type": "emissive", "emission": [EMISSION]}}, "meshes": [{"plane": 10, "material": "lamp"}]})";
+  auto with = [&](const std::string& emission) {
+    std::string s = scene;
+    s.replace(s.find("EMISSION"), 8, emission);
+    return write_temp("bright.json", s);
+  };
+  const std::string bright = with("1e20, 1e20, 1e20");
+  const std::string out = test::temp_path("bright.png");
+  const test::RunResult r =
+      test::run_program(binary_, test::quote(bright) + " --spp 2 --width 6 --height 4 -o " + test::quote(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto in = OIIO::ImageInput::open(out);
+  ASSERT_TRUE(in);
+  std::vector<unsigned char> pixels(6 * 4 * 3);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data()));
+  in->close();
+  for (unsigned char p : pixels) EXPECT_EQ(p, 255);
+  std::remove(out.c_str());
+  std::remove(bright.c_str());
+  const std::string over = with("3e38, 3e38, 3e38");
+  expect_refusal(binary_, test::quote(over) + " -o " + test::quote(out), "/materials/lamp/emission/0: 3e+38 is above");
+  std::remove(over.c_str());
+}
+
+// Issue 15, item 3: a 32768 x 32768 image used to end in std::bad_alloc (or the OOM killer) after
+// the scene was built; now refused before anything is allocated, saying what it would need.
+TEST_F(RenderCli, Issue15Item3_ImageBeyondMemoryIsRefusedUpFront) {
+  // Per pixel: with AOVs to EXR, 10 float channels and their encoding, 80 bytes (80 GiB); for
+  // first-hit, RGB (12), the per-pixel trace (16), its PNG (3 + 3), the 7-channel statistics
+  // image (28) and its EXR encoding (28): 90. Machines with that much free memory would render
+  // them: skipped there.
+  const uint64_t pixels = uint64_t(32768) * 32768;
+  if (available_memory_bytes() != kUnknownMemory && available_memory_bytes() >= 90 * pixels)
+    GTEST_SKIP() << "this machine has memory for a 32768 x 32768 image";
+  const std::string side = " --width 32768 --height 32768 --spp 1";
+  for (const auto& [args, needed] :
+       {std::pair{test::quote(kScene) + " --aovs -o " + test::quote(test::temp_path("huge.exr")) + side, "80.0 GiB"},
+        std::pair{test::quote(test::data_path("bunny_holes.obj")) + " --integrator first-hit -o " +
+                      test::quote(test::temp_path("huge.png")) + " --stats-image " +
+                      test::quote(test::temp_path("s.exr")) + side,
+                  "90.0 GiB"}}) {
+    SCOPED_TRACE(args);
+    const test::RunResult r = test::run_program(binary_, args);
+    ASSERT_TRUE(r.exited) << r.err;
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("32768 x 32768"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(needed), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;  // refused before loading or building anything
+  }
+}
+
+// Issue 15, item 14: a write that fails (a full disk) used to print "wrote" and exit 0; an
+// output that cannot be created (/proc/x.png) was found only after the render.
+TEST_F(RenderCli, Issue15Item14_FailedWritesExitNonZero) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  const std::string bunny = test::quote(test::data_path("bunny_holes.obj"));
+  const std::string png = test::temp_path("full.png"), exr = test::temp_path("full.exr");
+  const std::string fine = test::temp_path("fine.png");
+  std::filesystem::create_symlink("/dev/full", png);
+  std::filesystem::create_symlink("/dev/full", exr);
+  const std::string scene = test::quote(kScene) + " --width 8 --height 6 --spp 1";
+  const std::string first_hit = bunny + " --integrator first-hit --width 8 --height 6";
+  for (const auto& [args, failed] : {
+           std::pair{scene + " -o " + test::quote(png), png},
+           std::pair{scene + " -o " + test::quote(exr), exr},
+           std::pair{first_hit + " -o " + test::quote(png), png},
+           std::pair{first_hit + " -o " + test::quote(fine) + " --stats-image " + test::quote(exr), exr},
+       }) {
+    SCOPED_TRACE(args);
+    const test::RunResult r = test::run_program(binary_, args);
+    ASSERT_TRUE(r.exited) << r.err;
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.err.find(failed + ": write failed: "), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("wrote " + failed), std::string::npos) << r.out;
+  }
+  EXPECT_TRUE(std::filesystem::is_symlink(png));  // the link itself left alone
+  std::filesystem::remove(png);
+  std::filesystem::remove(fine);
+  std::filesystem::remove(exr);
+  // Paths that cannot be created fail before the scene is read or built.
+  const std::string dir_png = test::temp_path("a_directory.png");
+  std::filesystem::create_directories(dir_png);
+  for (const std::string& bad : {std::string("/proc/x.png"), dir_png}) {
+    for (const std::string& args : {scene + " -o " + test::quote(bad), first_hit + " -o " + test::quote(bad)}) {
+      SCOPED_TRACE(args);
+      const test::RunResult r = test::run_program(binary_, args);
+      ASSERT_TRUE(r.exited) << r.err;
+      EXPECT_EQ(r.exit_code, 1);
+      EXPECT_NE(r.err.find(bad + ": cannot be written: "), std::string::npos) << r.err;
+      EXPECT_TRUE(r.out.empty()) << r.out;  // nothing loaded, built or rendered
+    }
+  }
+  std::filesystem::remove(dir_png);
+  // The up-front check leaves nothing behind when the job fails later.
+  const std::string later = test::temp_path("never.png");
+  const std::string bad_scene = write_temp("bad.json", R"({"camera": 5})");
+  const test::RunResult r = test::run_program(binary_, test::quote(bad_scene) + " -o " + test::quote(later));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(later));
+  std::remove(bad_scene.c_str());
+}
+
+// Issue 15, item 11 (gwnrt-render's part): what the mesh loader skipped (an OBJ line with an
+// unknown statement) is said, as gwnrt-mesh says it, for meshes read by scene files, the default
+// scene and the first-hit integrator.
+TEST_F(RenderCli, Issue15Item11_MeshLoadWarningsArePrinted) {
+  const std::string mesh = write_temp("odd.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvv 1 1 1\n"
+                                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const std::string scene = write_temp("odd.json", R"({"gwn_objects": [{"file": ")" + mesh + R"("}]})");
+  const std::string out = " -o " + test::quote(test::temp_path("odd.png")) + " --width 8 --height 6";
+  for (const std::string& args : {test::quote(scene) + out + " --spp 1", test::quote(mesh) + out + " --spp 1",
+                                  test::quote(mesh) + out + " --integrator first-hit"}) {
+    SCOPED_TRACE(args);
+    const test::RunResult r = test::run_program(binary_, args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("gwnrt-render: " + mesh + ": warning: 1 line"), std::string::npos) << r.err;
+  }
+  std::remove(mesh.c_str());
+  std::remove(scene.c_str());
 }
 
 }  // namespace

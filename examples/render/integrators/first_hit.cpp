@@ -7,12 +7,14 @@
 
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "image_output.h"
 #include "load_model.h"
 #include "program.h"
 #include "progress_bar.h"
 #include "render_program.h"
 #include "tiles.h"
+#include "trace_level.h"
 
 namespace gwnrt::render {
 
@@ -123,9 +125,24 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   const TraceOptions& trace = job.settings.trace;
   const bool solid_angle = trace.mode == TraceMode::kSolidAngle;
 
+  // The pixel buffers, checked against the memory available before the mesh is even loaded
+  // (issue 15, item 3): the colour image, the per-pixel traces, the statistics image when asked
+  // for, and what writing each needs.
+  const auto format_of = [](const std::string& path) { return image_format_for(path).value_or(ImageFormat::kPng); };
+  uint64_t bytes_per_pixel = 4 * 3 + sizeof(PixelTrace) + write_image_bytes_per_pixel(format_of(job.output), 3);
+  if (!job.stats_image.empty()) bytes_per_pixel += 4 * 7 + write_image_bytes_per_pixel(format_of(job.stats_image), 7);
+  if (Status s = check_memory(saturating_product(uint64_t(job.width) * uint64_t(job.height), bytes_per_pixel),
+                              "a " + std::to_string(job.width) + " x " + std::to_string(job.height) +
+                                  " first-hit image" + (job.stats_image.empty() ? "" : " and its statistics image") +
+                                  " (" + std::to_string(bytes_per_pixel) + " bytes per pixel)");
+      !s.ok())
+    return examples::fail(kProgram, s.message());
+
   GwnModel model;
   examples::ModelLoad loaded;
   if (Status s = examples::load_model(job.mesh, model, loaded); !s.ok()) return examples::fail(kProgram, s.message());
+  examples::print_load_warnings(kProgram, job.mesh, loaded.report);
+  examples::warn_if_level_out_of_reach(kProgram, model.view(), trace);
   const size_t boundary_segments = model.boundary().segment_count();
   std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,
               job.mesh.c_str(), loaded.report.triangle_count, boundary_segments, boundary_segments ? "" : " (closed)",
@@ -138,6 +155,11 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
 
   const examples::PinholeCamera camera =
       examples::frame_box(model.bounds(), job.width, job.height, job.azimuth, job.elevation, job.fov_degrees);
+  // The framing is in float: a mesh too large for it (its box's squared diagonal overflows)
+  // would give every ray a non-finite origin.
+  const auto finite = [](const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!finite(camera.eye) || !finite(camera.forward) || !finite(camera.right) || !finite(camera.up))
+    return examples::fail(kProgram, job.mesh + ": the mesh is too large to frame with a camera in float");
   std::atomic<size_t> progress{0};
   FirstHitRender render;
   {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "gwnrt/io/memory.h"
 #include "image_output.h"
 #include "load_model.h"
 #include "program.h"
@@ -267,6 +268,22 @@ int run_path_job(const PathJob& job, const std::string& description) {
   if (job.max_depth > 0) scene.render.max_depth = job.max_depth;
   if (job.seed >= 0) scene.render.seed = uint64_t(job.seed);
   scene.render.aovs = job.aovs;
+  for (const LoadedMesh& m : scene.loaded_meshes) examples::print_load_warnings(kProgram, m.path, m.report);
+
+  // The pixel buffers, checked against the memory available before anything is allocated
+  // (issue 15, item 3): the image (3 channels, 10 with AOVs), PNG's tone-mapped copy, and what
+  // writing needs.
+  const ImageFormat format = image_format_for(job.output).value_or(ImageFormat::kPng);
+  const int channels = scene.render.aovs ? 10 : 3;
+  const uint64_t bytes_per_pixel = 4 * uint64_t(channels) + (format == ImageFormat::kPng ? 4 * 3 : 0) +
+                                   write_image_bytes_per_pixel(format, format == ImageFormat::kPng ? 3 : channels);
+  if (Status s = check_memory(
+          saturating_product(uint64_t(scene.camera.width) * uint64_t(scene.camera.height), bytes_per_pixel),
+          "a " + std::to_string(scene.camera.width) + " x " + std::to_string(scene.camera.height) + " " +
+              image_format_name(format) + " image" + (scene.render.aovs ? " with AOVs" : "") + " (" +
+              std::to_string(bytes_per_pixel) + " bytes per pixel)");
+      !s.ok())
+    return examples::fail(kProgram, s.message());
 
   const auto t0 = std::chrono::steady_clock::now();
   RenderScene rs;
@@ -287,7 +304,10 @@ int run_path_job(const PathJob& job, const std::string& description) {
               scene.camera.width, scene.camera.height, settings.spp, result.seconds,
               count_of(thread_limit.workers(), "thread").c_str(), 1e6 * result.seconds / (pixels * settings.spp),
               examples::human_count(double(result.samples) / result.seconds).c_str());
-  const bool png = image_format_for(job.output) == ImageFormat::kPng;
+  if (const uint64_t invalid = rs.invalid_rays()) {
+    warn(count_of(invalid, "ray") + " with a non-finite or out-of-range origin or direction dropped (shown as misses)");
+  }
+  const bool png = format == ImageFormat::kPng;
   if (Status s = write_image(job.output, png ? tone_mapped(result.image) : result.image, description); !s.ok())
     return examples::fail(kProgram, s.message());
   std::printf("%s: wrote %s\n", kProgram, job.output.c_str());
