@@ -10,6 +10,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "message.h"
+
 namespace gwnrt {
 namespace {
 
@@ -91,6 +93,18 @@ std::vector<uint64_t> spatial_order(const Aabb& box, std::span<const vec3> point
 
 }  // namespace
 
+Status validate_points(std::span<const vec3> points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const vec3& p = points[i];
+    if (!(std::fabs(p.x) <= kMaxQueryCoordinate && std::fabs(p.y) <= kMaxQueryCoordinate &&
+          std::fabs(p.z) <= kMaxQueryCoordinate))
+      return {StatusCode::kInvalidArgument,
+              cat("point ", i, " (", p.x, ", ", p.y, ", ", p.z, ") is not finite or lies beyond +-",
+                  kMaxQueryCoordinate, ", the coordinates gwnrt serves (its squared distances would overflow float)")};
+  }
+  return Status::Ok();
+}
+
 Status validate_request(const QueryRequest& request, const ModelView* view) {
   if (uint32_t(request.method) >= kWindingMethodCount)
     return {StatusCode::kInvalidArgument, "winding method must be auto, crossing, taylor or brute, got the value " +
@@ -124,7 +138,11 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
   const ModelView view = model_view(model);
   return parallel_map(
       "evaluate_points", "points", "result slots", points, results, 256, progress,
-      [&] { return validate_request(request, &view); }, [&](const vec3& x) { return evaluate_point(view, x, request); },
+      [&] {
+        if (Status s = validate_points(points); !s.ok()) return s;
+        return validate_request(request, &view);
+      },
+      [&](const vec3& x) { return evaluate_point(view, x, request); },
       [&] { return spatial_order(view.bounds, points); });
 }
 

@@ -18,7 +18,11 @@ Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, c
                        std::span<PointResult> results) {
   const ModelView view = model.view();
   return map_batch_on_device(
-      "evaluate_points", view, points, results, 128, [&] { return validate_request(request, &view); },
+      "evaluate_points", view, points, results, 128,
+      [&] {
+        if (Status s = validate_points(points); !s.ok()) return s;
+        return validate_request(request, &view);
+      },
       EvaluatePoint{view, request});
 }
 

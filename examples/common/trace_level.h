@@ -2,6 +2,7 @@
 // the level is a value of w in gwn mode and an angle in radians in solid-angle mode.
 #pragma once
 
+#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -15,6 +16,15 @@ inline void set_trace_surface(const std::string& mode, std::optional<double> lev
   const bool solid_angle = mode == "solid-angle";
   options.mode = solid_angle ? TraceMode::kSolidAngle : TraceMode::kWindingNumber;
   options.level = solid_angle ? float(level.value_or(2.0 * kPi) / (4.0 * kPi)) : float(level.value_or(0.5));
+}
+
+// Printed by the programs that trace: a level w never reaches has no surface, and every ray then
+// misses (model_view.h, level_within_reach); this says why.
+inline void warn_if_level_out_of_reach(const char* program, const ModelView& view, const TraceOptions& options) {
+  if (options.mode == TraceMode::kWindingNumber && !level_within_reach(view, options.level))
+    std::fprintf(stderr,
+                 "%s: warning: level %g lies outside every value w takes on this mesh (|w| < %u/2): S is empty\n",
+                 program, double(options.level), view.triangles.triangle_count);
 }
 
 }  // namespace gwnrt::examples

@@ -19,6 +19,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "load_model.h"
 #include "point_io.h"
 #include "program.h"
@@ -45,7 +46,7 @@ constexpr const char* kProgram = "gwnrt-trace";
 // One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf.
 Status read_rays(const std::string& path, std::vector<Ray>& rays) {
   std::string text, source;
-  if (Status s = gwnrt::examples::read_text(path, "rays file", text, source); !s.ok()) return s;
+  if (Status s = gwnrt::examples::read_text(path, text, source); !s.ok()) return s;
   rays.clear();
   return gwnrt::examples::parse_rows(
       text, source, {6, 8}, "6 or 8 numbers (ox oy oz dx dy dz [tnear tfar])", [](int column) { return column == 7; },
@@ -159,10 +160,19 @@ int main(int argc, char** argv) {
 
   std::vector<Ray> rays;
   if (Status s = read_rays(rays_path, rays); !s.ok()) return fail(kProgram, s.message());
+  // Checked before the model is built and the hits allocated: with overcommit a size beyond memory would kill the
+  // process later.
+  if (Status s = gwnrt::check_memory(
+          gwnrt::saturating_product(rays.size(), sizeof(RayHit)),
+          gwnrt::source_name(rays_path) + ": the hits of its " + std::to_string(rays.size()) + " rays");
+      !s.ok())
+    return fail(kProgram, s.message());
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
   if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(kProgram, s.message());
+  gwnrt::examples::print_load_warnings(kProgram, mesh_path, loaded.report);
+  gwnrt::examples::warn_if_level_out_of_reach(kProgram, model.view(), options);
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),

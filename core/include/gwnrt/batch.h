@@ -14,9 +14,17 @@ namespace gwnrt {
 inline ModelView model_view(const GwnModel& model) { return model.view(); }
 
 // results.size() must equal points.size(). `progress`, when given, counts finished points
-// (for a progress bar on another thread). Fails on a size mismatch, a bad order or a beta <= 0.
+// (for a progress bar on another thread). Fails on a size mismatch, a point validate_points
+// refuses, a bad order or a beta <= 0.
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress = nullptr);
+
+// The query points the drivers serve: finite, every coordinate within +-kMaxQueryCoordinate
+// (beyond, the squared distances to M overflow float: the distances came out NaN from 1e19 and
+// the sdf negative; within it, measured on the limits of kMaxMeshCoordinate and
+// kMinMeshExtent, w, the distances and the sdf are right). Names the first point that is not.
+inline constexpr float kMaxQueryCoordinate = 1e18f;
+Status validate_points(std::span<const vec3> points);
 
 // Order, beta, level and Newton options; with `view`, also that sdf and sheet-distance requests
 // ask for the level the view's sheets were classified for.

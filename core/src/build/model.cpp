@@ -6,6 +6,7 @@
 
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/sdf/sheets.h"
+#include "message.h"
 
 namespace gwnrt {
 namespace {
@@ -64,6 +65,32 @@ std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vect
 
 }  // namespace
 
+Status check_mesh_scale(const Mesh& mesh) {
+  float largest = 0.0f;
+  size_t largest_vertex = 0;
+  Aabb box;
+  for (const uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const vec3& p = mesh.positions[t[k]];
+      box.extend(p);
+      const float m = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+      if (m > largest) {
+        largest = m;
+        largest_vertex = t[k];
+      }
+    }
+  const vec3 extent = box.hi - box.lo;
+  const float across = std::max({extent.x, extent.y, extent.z});
+  const std::string range = cat("gwnrt computes in float and serves meshes whose coordinates lie within +-",
+                                kMaxMeshCoordinate, " and whose box is at least ", kMinMeshExtent, " across");
+  if (largest > kMaxMeshCoordinate)
+    return {StatusCode::kInvalidMesh, cat("mesh: vertex ", largest_vertex, " has a coordinate of magnitude ", largest,
+                                          "; ", range, ": scale the mesh down")};
+  if (!mesh.triangles.empty() && across < kMinMeshExtent)
+    return {StatusCode::kInvalidMesh, cat("mesh: its box is ", across, " across; ", range, ": scale the mesh up")};
+  return Status::Ok();
+}
+
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   return guard_status("GwnModel::build", [&] { return build_unguarded(std::move(mesh), out, options); });
 }
@@ -77,6 +104,7 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
     return {StatusCode::kInvalidArgument,
             "BuildOptions: sheet_method must be auto, crossing or taylor (brute would sum n² terms)"};
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
+  if (Status s = check_mesh_scale(mesh); !s.ok()) return s;
   using clock = std::chrono::steady_clock;
   GwnModel model;
   model.mesh_ = std::move(mesh);

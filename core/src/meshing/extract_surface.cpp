@@ -70,6 +70,12 @@ Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, S
   if (Status s = validate_options(options); !s.ok()) return s;
   if (Status s = check_attributes(model.mesh(), options.attributes); !s.ok()) return s;
   const ModelView view = model.view();
+  if (!level_within_reach(view, options.level)) {
+    stats.message = "level " + std::to_string(options.level) +
+                    " lies outside every value w takes on this mesh (|w| < " +
+                    std::to_string(view.triangles.triangle_count) + "/2): S is empty (an empty mesh)";
+    return Status::Ok();
+  }
   MeshGrid grid;
   if (Status s = make_grid(view, options, grid); !s.ok()) return s;
   for (int a = 0; a < 3; ++a) {

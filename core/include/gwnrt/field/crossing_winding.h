@@ -244,8 +244,25 @@ GWNRT_HD GWNRT_FORCEINLINE float crossing_winding(const Cone& cone, int mesh_jum
 }  // namespace detail
 
 // w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
-// cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M, where
-// the side of M that x is on is itself a matter of round-off.
+// cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M; on M
+// (within round-off) the tree's sum, which gives there the mean of w's one-sided limits.
+// Whether x lies on one of the triangles of a leaf lane whose box, grown by `pad`, holds x
+// (solid_angle.h's point_on_triangle, in float). The crossing walk asks it of every leaf its axis
+// ray meets, so that finding x on M costs a box test per leaf, not a traversal of its own (one
+// cost 0.11 µs a query on the closed bunny, half the crossing query's time).
+GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode& node, int lane, const vec3& x,
+                                   float pad) {
+  for (int k = 0; k < 3; ++k)
+    if (!(node.lo[k][lane] - pad <= x[k] && x[k] <= node.hi[k][lane] + pad)) return false;
+  for (uint32_t i = node.child[lane]; i < node.child[lane] + node.count[lane]; ++i) {
+    const vec3 a = tree.vertices[3 * i] - x, b = tree.vertices[3 * i + 1] - x, c = tree.vertices[3 * i + 2] - x;
+    const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+    const SolidAngleTangent<float> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+    if (point_on_triangle(t.numerator, t.denominator, la * lb * lc)) return true;
+  }
+  return false;
+}
+
 // x exactly on a cone triangle (found in the traversal: the tangent's numerator 0 and its
 // denominator <= 0) is moved along a fixed direction by this many ulps of its largest coordinate,
 // or, near the origin, by 2^-40 of the model's box (the least that moves the corners relative to
@@ -276,11 +293,25 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
       nudge *= 8.0f;
       continue;
     }
+    // On M the crossings ahead give the side behind x along the ray, where w is the mean of its
+    // one-sided limits (solid_angle.h): the tree's sum gives that, its triangles through x
+    // counting 0. (Crossings within round-off of x do not find x on M: a ray from a cube's edge
+    // runs in one face's plane and leaves the other by the tie-break.) Every leaf whose box holds
+    // x is met by the axis ray from x, so the walk looks for x on M in those.
+    const float pad = 4.0f * 1.2e-7f * largest;
     int mesh_jumps = 0;
-    visit_axis_crossings(m.triangles.bvh, m.triangles.vertices, frame, 0.0f, [&](uint32_t, float, int jump) {
-      mesh_jumps += jump;
-      if (stats) ++stats->mesh_crossings;
-    });
+    bool x_on_mesh = false;
+    visit_axis_crossings(
+        m.triangles.bvh, m.triangles.vertices, frame, 0.0f,
+        [&](uint32_t, float, int jump) {
+          mesh_jumps += jump;
+          if (stats) ++stats->mesh_crossings;
+        },
+        0,
+        [&](const WideNode& node, int lane) {
+          x_on_mesh = x_on_mesh || point_on_leaf(m.triangles, node, lane, x, pad);
+        });
+    if (x_on_mesh) return winding_number_taylor<2, WantGradient, WantHessian>(m.triangles, x_in, cone_beta);
     WindingSample out;
     out.w = detail::crossing_winding(cone, mesh_jumps);
     if constexpr (WantGradient)

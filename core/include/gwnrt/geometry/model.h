@@ -21,6 +21,17 @@ namespace gwnrt {
 // Leaves hold at most this many primitives (the traversals' per-leaf loops assume few).
 inline constexpr uint32_t kMaxLeafSize = 64;
 
+// The scales a model serves (GwnModel::build refuses others, saying so). Every query is in float:
+// products of three or four lengths (van Oosterom's denominator, the point-triangle distance)
+// overflow or fall into denormals outside this range, and measured on a tetrahedron scaled by
+// 10^k the answers were right from 1e-10 to 1e8 and wrong beyond (distances 1.4x too large at
+// 1e10, trace normals 0 at 1e10 and NaN at 1e20, w = 0 inside at 1e-16): the coordinates of the
+// triangles' corners lie within +-kMaxMeshCoordinate, and their box is at least kMinMeshExtent
+// across along its longest side.
+inline constexpr float kMaxMeshCoordinate = 1e8f;
+inline constexpr float kMinMeshExtent = 1e-8f;
+Status check_mesh_scale(const Mesh& mesh);
+
 struct BuildOptions {
   uint32_t max_leaf_triangles = 4;
   uint32_t max_leaf_segments = 4;

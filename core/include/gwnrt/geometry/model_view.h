@@ -48,4 +48,13 @@ struct ModelView {
   float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (docs/design.md §5)
 };
 
+// Whether w can reach `level` anywhere: w sums one solid angle in (-2π, 2π) over 4π per triangle,
+// so |w| < n/2 for n triangles, and ∂{w > level} is empty for |level| >= n/2. The tracer and the
+// mesher give no surface for such a level (a level of 3e9 overflowed the tracer's integer band,
+// and it reported sheet hits with flipped normals where w never gets near it); the programs say
+// why.
+GWNRT_HD inline bool level_within_reach(const ModelView& m, float level) {
+  return fabsf(level) < 0.5f * float(m.triangles.triangle_count);
+}
+
 }  // namespace gwnrt

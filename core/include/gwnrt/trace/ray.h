@@ -314,12 +314,18 @@ GWNRT_HD GWNRT_FORCEINLINE void visit_axis_leaf(const vec3* vertices, uint32_t f
 #endif
 }
 
+// A leaf hook that does nothing (visit_axis_crossings' default).
+struct NoLeafHook {
+  GWNRT_HD void operator()(const WideNode&, int) const {}
+};
+
 // Calls visit(leaf index, t, jump) for every crossing of the axis ray's line with t >= t_min
 // (t_min <= 0 also reports crossings just behind the origin), in no particular order, over the
-// subtree below `root` (0: the whole tree).
-template <class Visitor>
+// subtree below `root` (0: the whole tree); and leaf_hook(node, lane) for every leaf lane the ray
+// meets, before its crossings (every leaf whose box holds the origin among them).
+template <class Visitor, class LeafHook = NoLeafHook>
 GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_min,
-                                          Visitor&& visit, uint32_t root = 0) {
+                                          Visitor&& visit, uint32_t root = 0, LeafHook&& leaf_hook = {}) {
   if (bvh.node_count == 0) return;
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
@@ -338,6 +344,7 @@ GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertic
         stack[sp++] = node.child[l];
         continue;
       }
+      leaf_hook(node, l);
       visit_axis_leaf(vertices, node.child[l], node.count[l], f, t_min, visit);
     }
   }

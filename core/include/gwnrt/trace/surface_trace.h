@@ -59,6 +59,9 @@ class SurfaceTracer {
     const vec3 extent = m.bounds.hi - m.bounds.lo;
     eps_ = o.epsilon * glm::length(extent);
     phase_ = o.level - floorf(o.level);
+    // No sheet and no smooth piece of w is at a level w never reaches (model_view.h); the
+    // band's integer arithmetic below then also stays within an int.
+    if (sheets_ && !level_within_reach(m, o.level)) sheets_ = smooth_ = false;
   }
 
   GWNRT_HD RayHit run() {

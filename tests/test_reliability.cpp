@@ -1,0 +1,305 @@
+// Hostile input to the numeric core (issue 15): points exactly on M, levels w never reaches.
+// Each case is one the issue reported, with the class around it.
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
+#include "gwnrt/batch.h"
+#include "gwnrt/meshing/extract_surface.h"
+#include "test_util.h"
+
+namespace gwnrt {
+namespace {
+
+using test::build_model;
+using test::load_test_mesh;
+
+// w at x by each method the queries offer (and the tree at each order), by name.
+struct MethodValue {
+  std::string name;
+  float w;
+};
+std::vector<MethodValue> w_by_every_method(const GwnModel& model, const vec3& x) {
+  std::vector<MethodValue> out;
+  const std::pair<WindingMethod, const char*> methods[] = {{WindingMethod::kAuto, "auto"},
+                                                           {WindingMethod::kCrossing, "crossing"},
+                                                           {WindingMethod::kTaylor, "taylor"},
+                                                           {WindingMethod::kBrute, "brute"}};
+  for (const auto& [method, name] : methods)
+    for (int order = 0; order <= (method == WindingMethod::kTaylor ? 2 : 0); ++order) {
+      QueryRequest request;
+      request.method = method;
+      request.taylor.order = method == WindingMethod::kTaylor ? order : 2;
+      const PointResult r = evaluate_point(model.view(), x, request);
+      out.push_back({std::string(name) + (method == WindingMethod::kTaylor ? std::to_string(order) : ""), r.w});
+    }
+  return out;
+}
+
+// Item 7: on M, w is the mean of its one-sided limits, the average of w over a small sphere
+// about x: for a closed mesh 1/2 on a face, the interior dihedral angle over 2π on an edge, the
+// corner's solid angle over 4π at a vertex (solid_angle.h, point_on_triangle). Analytic values;
+// every method must give them (the tree's far clusters within its 2e-3, the others within 1e-5).
+void expect_on_mesh_values(const GwnModel& model, const std::vector<std::pair<vec3, double>>& cases) {
+  for (const auto& [x, expected] : cases)
+    for (const MethodValue& v : w_by_every_method(model, x)) {
+      const double tolerance = v.name.rfind("taylor", 0) == 0 ? 2e-3 : 1e-5;
+      EXPECT_NEAR(v.w, expected, tolerance) << v.name << " at (" << x.x << ", " << x.y << ", " << x.z << ")";
+    }
+}
+
+TEST(OnMesh, CubeFacesEdgesAndCornersTakeTheMeanOfBothSides) {
+  const GwnModel model = build_model(test::make_cube());  // [-1, 1]³
+  std::vector<std::pair<vec3, double>> cases = {
+      {{0, 0, -1}, 0.5},         // the bottom face's diagonal, where the issue's cube gave -0.5
+      {{0.25f, 0.5f, 1}, 0.5},   // inside a top triangle
+      {{-1, 0.3f, 0.1f}, 0.5},   // a side face
+      {{1, 0, -1}, 0.25},        // an edge: the dihedral angle π/2 over 2π
+      {{0, -1, 1}, 0.25},        //
+      {{1, 1, 1}, 0.125},        // a corner: an octant
+      {{-1, -1, -1}, 0.125},     //
+      {{-1, 1, -0.75f}, 0.25}};  // an edge, off its midpoint
+  // Random points of the faces (coordinates exactly ±1 on one axis).
+  test::Random random(7);
+  for (int i = 0; i < 40; ++i) {
+    vec3 x(random.uniform(-1, 1), random.uniform(-1, 1), random.uniform(-1, 1));
+    x[i % 3] = i % 2 ? 1.0f : -1.0f;
+    cases.push_back({x, 0.5});
+  }
+  expect_on_mesh_values(model, cases);
+}
+
+TEST(OnMesh, TetrahedronEdgesAndCornersTakeTheMeanOfBothSides) {
+  Mesh tet;
+  tet.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tet.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};  // outward
+  const GwnModel model = build_model(std::move(tet));
+  // The slanted face's dihedral angle with each axis face: acos(1/√3); the issue's 1.152.
+  const double slanted = std::acos(1.0 / std::sqrt(3.0)) / (2.0 * kPi);
+  // The corner (1, 0, 0) by Girard: its dihedral angles π/2, acos(1/√3) twice, less π.
+  const double corner = (kPi / 2 + 2 * std::acos(1.0 / std::sqrt(3.0)) - kPi) / (4.0 * kPi);
+  expect_on_mesh_values(model, {{{0.5f, 0.5f, 0}, slanted},
+                                {{0, 0.5f, 0.5f}, slanted},
+                                {{0.5f, 0, 0}, 0.25},
+                                {{0, 0, 0.25f}, 0.25},
+                                {{0, 0, 0}, 0.125},
+                                {{1, 0, 0}, corner},
+                                {{0, 0, 1}, corner},
+                                {{0.25f, 0.25f, 0}, 0.5},
+                                {{0.25f, 0.25f, 0.5f}, 0.5}});
+}
+
+TEST(OnMesh, FloatSolidAngleCountsTrianglesThroughTheirPointsAsZero) {
+  // x on the triangle (inside, on an edge, on a corner) counts 0 in float and in double; beside
+  // it in its plane, and off its plane, the solid angle is its own (against the closed form of
+  // the octant triangle, π/2 from the origin).
+  const vec3 a(2, 0, 0), b(0, 2, 0), c(0, 0, 2);
+  for (const vec3& x : {vec3(1, 1, 0), vec3(0.5f, 0.5f, 1), vec3(2, 0, 0), vec3(0.25f, 0.75f, 1.0f)}) {
+    EXPECT_EQ(triangle_solid_angle(a, b, c, x), 0.0f);
+    EXPECT_EQ(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x)), 0.0);
+  }
+  EXPECT_NEAR(triangle_solid_angle(a, b, c, vec3(2, 2, -2)), 0.0f, 1e-6f);  // in its plane, beside it
+  EXPECT_NEAR(triangle_solid_angle(a, b, c, vec3(0.0f)), float(kPi / 2), 1e-6f);
+  // Just off the plane the limits ±2π are kept: x at 1e-3 of the face on either side.
+  const vec3 n = glm::normalize(vec3(1, 1, 1));
+  const vec3 centre(2.0f / 3.0f);
+  EXPECT_NEAR(triangle_solid_angle(a, b, c, centre - 1e-3f * n), 2 * kPi, 0.01);
+  EXPECT_NEAR(triangle_solid_angle(a, b, c, centre + 1e-3f * n), -2 * kPi, 0.01);
+}
+
+// Item 4: |w| < n/2 for n triangles, so a level at or beyond it has no surface: no hit, no sheet
+// with a flipped normal (the issue's level 3e9 overflowed the tracer's integer band), an empty
+// mesh that says why; levels within reach still trace.
+TEST(UnreachableLevel, TracesNoSurfaceAndMeshesNothing) {
+  const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));
+  const float n_half = 0.5f * float(model.view().triangles.triangle_count);
+  const Aabb box = model.bounds();
+  test::Random random(3);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 64; ++i) {
+    Ray ray;
+    ray.origin = box.centre() + 2.0f * (box.hi - box.lo) * random.unit();
+    ray.direction = random.in_box(box) - ray.origin;
+    rays.push_back(ray);
+  }
+  std::vector<RayHit> hits(rays.size());
+  TraceOptions options;
+  ASSERT_TRUE(trace_rays(model, rays, options, hits).ok());
+  int reference_hits = 0;
+  for (const RayHit& h : hits) reference_hits += h.hit;
+  EXPECT_GT(reference_hits, 32);  // the rays aim at the bunny: most hit S at 1/2
+  for (float level : {3e9f, -3e9f, 1e30f, -1e30f, 2.2e9f, n_half, -n_half, std::nextafter(n_half, 1e30f)}) {
+    options.level = level;
+    ASSERT_TRUE(trace_rays(model, rays, options, hits).ok()) << level;
+    for (size_t i = 0; i < hits.size(); ++i) {
+      EXPECT_FALSE(hits[i].hit) << "level " << level << " ray " << i;
+      EXPECT_FALSE(hits[i].invalid) << "level " << level << " ray " << i;
+    }
+    MeshingOptions meshing;
+    meshing.level = level;
+    meshing.resolution = 16;
+    SurfaceMesh out;
+    MeshingStats stats;
+    ASSERT_TRUE(extract_surface(model, meshing, out, &stats).ok()) << level;
+    EXPECT_TRUE(out.positions.empty()) << level;
+    EXPECT_NE(stats.message.find("outside every value w takes"), std::string::npos) << stats.message;
+  }
+  // Solid-angle mode takes the level modulo one turn: any finite level is a surface.
+  options.mode = TraceMode::kSolidAngle;
+  options.level = 3e9f + 0.5f;  // a whole number in float: the level set Ω ≡ 0
+  ASSERT_TRUE(trace_rays(model, rays, options, hits).ok());
+  for (const RayHit& h : hits) EXPECT_FALSE(h.invalid);
+}
+
+// Item 6: scales. The tetrahedron with corners 0, s·e_x, s·e_y, s·e_z (outward), across the
+// scales a model serves, against its closed forms: w = 1 inside and 0 outside by every method;
+// the distance from (-k s, s/4, s/4) is k s (its foot lies inside the face x = 0), the signed
+// distance the same, positive; the ray along +x from there hits the face at t = k s with normal
+// -x. The issue's tetrahedron at 1e13 gave w = 0.938, at 1e20 NaN, its distances were 1.4-3x too
+// large beyond 1e10 and below 1e-11, its trace normals 0 or NaN.
+Mesh scaled_tetrahedron(float s) {
+  Mesh tet;
+  tet.positions = {{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}};
+  tet.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return tet;
+}
+
+TEST(Scale, EveryAnswerIsRightAcrossTheServedScales) {
+  for (const float s : {kMinMeshExtent, 1e-6f, 1e-3f, 1.0f, 1e3f, 1e6f, kMaxMeshCoordinate}) {
+    const GwnModel model = build_model(scaled_tetrahedron(s));
+    for (const float k : {0.1f, 3.0f, 1e3f, 1e6f}) {
+      const vec3 outside(-k * s, 0.25f * s, 0.25f * s);
+      const vec3 inside(0.2f * s, 0.2f * s, 0.2f * s);
+      for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor, WindingMethod::kBrute}) {
+        QueryRequest request;
+        request.method = method;
+        request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldSignedDistance |
+                         kFieldHarnackBound;
+        const std::vector<vec3> points = {outside, inside};
+        std::vector<PointResult> r(points.size());
+        ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+        const std::string where =
+            "scale " + std::to_string(s) + " k " + std::to_string(k) + " method " + std::to_string(int(method));
+        EXPECT_NEAR(r[0].w, 0.0f, 2e-3f) << where;  // the tree's promised accuracy
+        EXPECT_NEAR(r[1].w, 1.0f, 2e-3f) << where;
+        EXPECT_NEAR(r[0].unsigned_distance / (k * s), 1.0f, 1e-5f) << where;
+        EXPECT_NEAR(r[0].sdf.distance / (k * s), 1.0f, 1e-5f) << where;
+        EXPECT_GT(r[1].sdf.distance, -0.3f * s) << where;  // inside: negative, at most the inradius
+        EXPECT_LT(r[1].sdf.distance, 0.0f) << where;
+        EXPECT_LE(r[0].harnack_bound, r[0].unsigned_distance * (1 + 1e-6f)) << where;
+        for (int i = 0; i < 2; ++i) {
+          EXPECT_TRUE(std::isfinite(r[i].gradient.x) && std::isfinite(r[i].gradient.y) &&
+                      std::isfinite(r[i].gradient.z))
+              << where;
+          EXPECT_TRUE(std::isfinite(r[i].hessian.xx) && std::isfinite(r[i].hessian.xy)) << where;
+        }
+      }
+      Ray ray;
+      ray.origin = outside;
+      ray.direction = vec3(1, 0, 0);
+      const std::vector<Ray> rays = {ray};
+      std::vector<RayHit> hits(1);
+      ASSERT_TRUE(trace_rays(model, rays, TraceOptions{}, hits).ok());
+      ASSERT_TRUE(hits[0].hit) << s;
+      EXPECT_NEAR(hits[0].t / (k * s), 1.0f, 1e-5f) << s;
+      EXPECT_EQ(hits[0].normal, vec3(-1, 0, 0)) << s;
+    }
+  }
+}
+
+TEST(Scale, MeshesBeyondTheServedScalesAreRefusedSayingSo) {
+  for (const float s : {1e9f, 1e13f, 1e20f, 1e30f, 1e-9f, 1e-14f, 1e-30f}) {
+    GwnModel model;
+    const Status status = GwnModel::build(scaled_tetrahedron(s), model);
+    ASSERT_FALSE(status.ok()) << s;
+    EXPECT_NE(status.message().find("scale the mesh"), std::string::npos) << status.message();
+  }
+  // Only the triangles' corners count: a far vertex no triangle uses is no scale of the mesh.
+  Mesh unused = scaled_tetrahedron(1.0f);
+  unused.positions.push_back({1e30f, 0, 0});
+  GwnModel model;
+  EXPECT_TRUE(GwnModel::build(std::move(unused), model).ok());
+}
+
+TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
+  // bunny_holes at 10^k from its box's centre: w within A/(4π d²) of 0 (the bound the plugin's
+  // box rests on: no NaN, the issue's far points gave NaN from 3e12), the distance d up to the
+  // box's half diagonal, the sdf positive; beyond kMaxQueryCoordinate, or not finite, refused
+  // naming the point.
+  const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));
+  const Aabb box = model.bounds();
+  const float half_diagonal = 0.5f * glm::length(box.hi - box.lo);
+  double area = 0;
+  for (const uvec3& t : model.mesh().triangles) {
+    const dvec3 a(model.mesh().positions[t[0]]), b(model.mesh().positions[t[1]]), c(model.mesh().positions[t[2]]);
+    area += 0.5 * glm::length(glm::cross(b - a, c - a));
+  }
+  std::vector<vec3> points;
+  for (float d = 1e2f; d <= 0.5f * kMaxQueryCoordinate; d *= 10.0f)
+    points.push_back(box.centre() + vec3(d, 0.3f * d, -0.2f * d));
+  for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor, WindingMethod::kBrute}) {
+    QueryRequest request;
+    request.method = method;
+    request.fields = kFieldW | kFieldGradient | kFieldUnsignedDistance | kFieldSignedDistance;
+    std::vector<PointResult> r(points.size());
+    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    for (size_t i = 0; i < points.size(); ++i) {
+      const double d = glm::length(dvec3(points[i]) - dvec3(box.centre()));
+      const double near = d - half_diagonal;
+      EXPECT_LE(std::fabs(r[i].w), area / (4 * kPi * near * near) + 1e-12) << i;
+      EXPECT_NEAR(r[i].unsigned_distance, d, half_diagonal * 1.01 + 4e-7 * d) << i;  // and float round-off
+      EXPECT_GT(r[i].sdf.distance, 0.0f) << i;
+      EXPECT_TRUE(std::isfinite(r[i].gradient.x)) << i;
+    }
+  }
+  for (const vec3& bad : {vec3(2e18f, 0, 0), vec3(0, -1e30f, 0), vec3(0, 0, std::numeric_limits<float>::quiet_NaN()),
+                          vec3(kInfinity, 0, 0)}) {
+    std::vector<vec3> batch = points;
+    batch.insert(batch.begin() + 3, bad);
+    std::vector<PointResult> r(batch.size());
+    const Status status = evaluate_points(model, batch, QueryRequest{}, r);
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("point 3 "), std::string::npos) << status.message();
+  }
+}
+
+TEST(ScaleCli, QueryRefusesAnUnservedMeshNamingIt) {
+  // The issue's gwnrt-query printed w = -nan, udist = inf at 1e30 and exited 0.
+  const std::string binary = test::example_binary("gwnrt-query");
+  if (binary.empty()) GTEST_SKIP() << "gwnrt-query not built next to the tests";
+  const std::string mesh = test::temp_path("huge_tet") + ".obj", points = test::temp_path("huge_points") + ".txt";
+  {
+    std::ofstream m(mesh);
+    m << "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    std::ofstream p(points);
+    p << "2e29 2e29 2e29\n";
+  }
+  const test::RunResult run = test::run_program(binary, test::quote(mesh) + " --points " + test::quote(points));
+  EXPECT_TRUE(run.exited);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("scale the mesh down"), std::string::npos) << run.err;
+  EXPECT_EQ(run.out.find("nan"), std::string::npos) << run.out;
+}
+
+TEST(UnreachableLevelCli, TraceSaysTheSurfaceIsEmpty) {
+  // gwnrt-trace at the issue's level 3e9: every ray misses (no sheet hit with a flipped normal)
+  // and a warning says why.
+  const std::string binary = test::example_binary("gwnrt-trace");
+  if (binary.empty()) GTEST_SKIP() << "gwnrt-trace not built next to the tests";
+  const std::string rays = test::temp_path("rays") + ".txt";
+  std::ofstream(rays) << "-1 0.1 0.05 1 0 0\n0.05 -1 0.1 0 1 0\n";
+  for (const std::string level : {"3e9", "-3e9", "1e30"}) {
+    const test::RunResult run = test::run_program(
+        binary, test::quote(test::data_path("bunny_holes.obj")) + " --rays " + test::quote(rays) + " --level " + level);
+    ASSERT_TRUE(run.exited) << level;
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.err.find("outside every value w takes"), std::string::npos) << run.err;
+    EXPECT_EQ(run.out.find(",sheet,"), std::string::npos) << run.out;
+  }
+}
+
+}  // namespace
+}  // namespace gwnrt
