@@ -133,6 +133,22 @@ inline Mesh make_cube(bool open_top = false) {
   return m;
 }
 
+// A regular n-gon of `radius` about `centre` in the plane spanned by the orthonormal u and v
+// (z = 0 by default), fanned from vertex 0 as the mesh readers fan a polygon face: n - 2 long thin
+// triangles that all meet at vertex 0, normals along u × v. With `star` != 1 every other vertex
+// is at star · radius: a non-convex star, whose fan has triangles of both orientations overlapping
+// (the polygon's inside is covered once net). Corners computed in double, rounded once to float.
+inline Mesh make_fanned_polygon(int n, double radius = 0.5, dvec3 centre = {0.5, 0.5, 0.0}, double star = 1.0,
+                                dvec3 u = {1, 0, 0}, dvec3 v = {0, 1, 0}) {
+  Mesh m;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * kPi * i / n, r = (i % 2 == 1 ? star : 1.0) * radius;
+    m.positions.push_back(vec3(centre + r * std::cos(a) * u + r * std::sin(a) * v));
+  }
+  for (uint32_t i = 1; i + 1 < uint32_t(n); ++i) m.triangles.push_back({0u, i, i + 1});
+  return m;
+}
+
 inline Aabb mesh_bounds(const Mesh& m) {
   Aabb box;
   for (const vec3& p : m.positions) box.extend(p);

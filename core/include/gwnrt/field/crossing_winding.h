@@ -246,19 +246,23 @@ GWNRT_HD GWNRT_FORCEINLINE float crossing_winding(const Cone& cone, int mesh_jum
 // w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
 // cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M; on M
 // (within round-off) the tree's sum, which gives there the mean of w's one-sided limits.
-// Whether x lies on one of the triangles of a leaf lane whose box, grown by `pad`, holds x
-// (solid_angle.h's point_on_triangle, in float). The crossing walk asks it of every leaf its axis
-// ray meets, so that finding x on M costs a box test per leaf, not a traversal of its own (one
-// cost 0.11 µs a query on the closed bunny, half the crossing query's time).
+// Whether x lies on one of the triangles of a leaf lane whose box, grown by `pad`, holds x: as
+// the tree's near field decides it (winding_number.h: in double, point_on_triangle, where float
+// is ill-conditioned), so that the tree's sum taken there gives these triangles 0. The crossing
+// walk asks it of every leaf its axis ray meets, so that finding x on M costs a box test per leaf,
+// not a traversal of its own (one cost 0.11 µs a query on the closed bunny, half the query).
 GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode& node, int lane, const vec3& x,
                                    float pad) {
   for (int k = 0; k < 3; ++k)
     if (!(node.lo[k][lane] - pad <= x[k] && x[k] <= node.hi[k][lane] + pad)) return false;
   for (uint32_t i = node.child[lane]; i < node.child[lane] + node.count[lane]; ++i) {
-    const vec3 a = tree.vertices[3 * i] - x, b = tree.vertices[3 * i + 1] - x, c = tree.vertices[3 * i + 2] - x;
-    const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-    const SolidAngleTangent<float> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
-    if (point_on_triangle(t.numerator, t.denominator, la * lb * lc)) return true;
+    const vec3 &p0 = tree.vertices[3 * i], &p1 = tree.vertices[3 * i + 1], &p2 = tree.vertices[3 * i + 2];
+    float omega;
+    if (near_solid_angle_float(p0, p1, p2, x, omega)) continue;  // well off the triangle
+    const dvec3 xd(x), a = dvec3(p0) - xd, b = dvec3(p1) - xd, c = dvec3(p2) - xd;
+    const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+    const SolidAngleTangent<double> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+    if (point_on_triangle(t.numerator, t.denominator, la * lb * lc, kOnTriangleRoundOff)) return true;
   }
   return false;
 }

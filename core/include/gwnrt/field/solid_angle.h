@@ -35,26 +35,20 @@ GWNRT_HD GWNRT_FORCEINLINE SolidAngleTangent<T> solid_angle_tangent(const glm::v
 }
 
 // x on the triangle itself: in its plane up to the round-off of the numerator a·(b × c), which
-// is that of |a||b||c| (about 7 float ulps: 1e-6 in float; 1e-12 in double, as the cone's test in
+// is that of |a||b||c| (`relative` of it: kOnTriangleRoundOff for double, as the cone's test in
 // crossing_winding.h), and not beside it (the denominator is > 0 at points of the plane outside
 // the triangle, <= 0 only on it). There Ω's one-sided limits are ±2π, and which one the signs
 // give is round-off (a cube's face diagonal gave w = -0.5, a tetrahedron's edge 1.152). On M, w
 // is the mean of its limits, the average of w over a small sphere about x (1/2 on a face of a
 // closed mesh, the dihedral angle over 2π on an edge, the corner's solid angle over 4π at a
-// vertex): the triangles that x lies on count 0. T is a scalar or a lane vector (then a mask),
-// relative the round-off for its element type.
-inline constexpr float kOnTriangleFloat = 1e-6f;
-inline constexpr double kOnTriangleDouble = 1e-12;
+// vertex): the triangles that x lies on count 0. The float near field decides it in double
+// (winding_number.h, near_solid_angle: float is ill-conditioned there). T is a scalar or a lane
+// vector (then a mask).
+inline constexpr double kOnTriangleRoundOff = 1e-12;
 template <class T, class R>
 GWNRT_HD GWNRT_FORCEINLINE auto point_on_triangle(T numerator, T denominator, T length_product, R relative) {
   const T round_off = length_product * relative;
   return (numerator <= round_off) & (-numerator <= round_off) & (denominator <= round_off);
-}
-GWNRT_HD GWNRT_FORCEINLINE bool point_on_triangle(float numerator, float denominator, float length_product) {
-  return point_on_triangle(numerator, denominator, length_product, kOnTriangleFloat);
-}
-GWNRT_HD GWNRT_FORCEINLINE bool point_on_triangle(double numerator, double denominator, double length_product) {
-  return point_on_triangle(numerator, denominator, length_product, kOnTriangleDouble);
 }
 
 template <class T>
@@ -64,7 +58,7 @@ GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<
   const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
   const SolidAngleTangent<T> tangent = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
-  if (point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc)) return T(0);
+  if (point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc, T(kOnTriangleRoundOff))) return T(0);
   return T(2) * arctan2(tangent.numerator, tangent.denominator);
 }
 

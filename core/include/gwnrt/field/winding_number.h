@@ -220,7 +220,9 @@ GWNRT_FORCEINLINE void visit_multipole_lanes(const TriangleTreeView& tree, const
 // (centre p̄, radius r) has |x - p̄| > beta·r (leaves: kLeafExpansionScale·beta·r) is handed to
 // visitor.far(node, lane, d = p̄ - x) (on the host, a FarLanesVisitor gets all of a node's at
 // once); the triangles of nearer leaves to visitor.near(t, p0, p1, p2), t its leaf-order index;
-// nearer inner clusters are opened.
+// nearer inner clusters are opened. A scalar visitor may leave out near clusters it knows add
+// nothing (visitor.skip_near(node, lane) true: the sheet classification's clusters that lie in
+// the plane of x and do not contain it, core/src/build/sheets.cpp).
 template <class Visitor>
 GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, const vec3& x, float beta,
                                                 Visitor& visitor) {
@@ -248,6 +250,8 @@ GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, co
         }
         const uint32_t child = node.child[l];
         if (child == kEmptyLane) continue;
+        if constexpr (requires { visitor.skip_near(ni, l); })
+          if (visitor.skip_near(ni, l)) continue;
         if (node.count[l] == 0) {
           stack[sp++] = child;
           continue;
@@ -268,6 +272,28 @@ GWNRT_HD GWNRT_FORCEINLINE void add_cluster_far_field(const TriangleTreeView& tr
   add_far_field<Order, WantGradient, WantHessian>(n, s, p, e, d, acc);
 }
 
+// The near field is summed in float, but beside a long edge float has no digits left: where x
+// lies within a small fraction of an edge's length from that edge (or of the triangle's size from
+// its interior), van Oosterom's numerator and denominator are both far below |a||b||c|, the scale
+// of their round-off. A 10^4-gon fanned from one vertex (slivers 1 long, 3e-4 wide) gave w = 0.483
+// for 0.4999 at 1e-4 below its centre, and 0.31 off at worst within 1e-3 of it, while every far
+// cluster was right to 1e-10. Such a triangle (both below kNearConditioning |a||b||c|: the shape of
+// point_on_triangle, with this looser bound) is evaluated in double, as the reference is; the
+// float error of any other is then at most a few ε / kNearConditioning (≈ 1.5e-5 rad).
+inline constexpr float kNearConditioning = 1.0f / 64;
+
+// Ω of one near triangle: in float where that is well-conditioned (true; its value in `omega`),
+// else false (the caller takes it in double).
+GWNRT_HD GWNRT_FORCEINLINE bool near_solid_angle_float(const vec3& p0, const vec3& p1, const vec3& p2, const vec3& x,
+                                                       float& omega) {
+  const vec3 a = p0 - x, b = p1 - x, c = p2 - x;
+  const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+  const SolidAngleTangent<float> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+  if (point_on_triangle(t.numerator, t.denominator, la * lb * lc, kNearConditioning)) return false;
+  omega = 2.0f * arctan2(t.numerator, t.denominator);
+  return true;
+}
+
 namespace detail {
 
 template <int Order, bool WantGradient, bool WantHessian>
@@ -279,7 +305,24 @@ struct TaylorSum {
     add_cluster_far_field<Order, WantGradient, WantHessian>(tree, node, lane, d, acc);
   }
   GWNRT_HD void near(uint32_t, const vec3& p0, const vec3& p1, const vec3& p2) {
-    acc.omega += triangle_solid_angle(p0, p1, p2, x);
+    float omega;
+    if (!near_solid_angle_float(p0, p1, p2, x, omega)) {
+      // Ill-conditioned: the derivatives' edge terms lose their digits there too (each long
+      // edge's Biot–Savart term is ~1/h, and the terms of shared edges cancel), so all in double.
+      const dvec3 q0(p0), q1(p1), q2(p2), xd(x);
+      acc.omega += float(triangle_solid_angle(q0, q1, q2, xd));
+      if constexpr (WantHessian) {
+        dvec3 g;
+        Sym3<double> h;
+        triangle_solid_angle_derivatives(q0, q1, q2, xd, g, h);
+        if constexpr (WantGradient) acc.gradient += vec3(g);
+        acc.hessian += Sym3<float>{float(h.xx), float(h.xy), float(h.xz), float(h.yy), float(h.yz), float(h.zz)};
+      } else if constexpr (WantGradient) {
+        acc.gradient += vec3(triangle_solid_angle_gradient(q0, q1, q2, xd));
+      }
+      return;
+    }
+    acc.omega += omega;
     if constexpr (WantHessian) {
       vec3 g;
       sym3 h;
@@ -387,6 +430,18 @@ struct TaylorLanesSum {
     pending.relative_to(x, g);
     const LaneTangent<fnear> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     fnear omega = 2.0f * lane_atan2(tangent.numerator, tangent.denominator);
+    // Ill-conditioned lanes (near_solid_angle_float) again in double: fewer than 0.003 a query on
+    // the bundled meshes, so a scalar loop.
+    const uint32_t ill = lane_bits(point_on_triangle(tangent.numerator, tangent.denominator, tangent.length_product,
+                                                     kNearConditioning)) &
+                         ((1u << pending.count) - 1u);
+    for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
+      const int l = lowest_set_bit(rest);
+      const auto corner = [&](int j) {
+        return dvec3(pending.corners[3 * j][l], pending.corners[3 * j + 1][l], pending.corners[3 * j + 2][l]);
+      };
+      omega[l] = float(triangle_solid_angle(corner(0), corner(1), corner(2), dvec3(x)));
+    }
     if (pending.count < kNearWidth) {  // the unused lanes hold stale corners
       inear lane;
       for (int i = 0; i < kNearWidth; ++i) lane[i] = i;
