@@ -8,6 +8,7 @@
 
 #include "cli_util.h"
 #include "gwnrt/batch.h"
+#include "gwnrt/field/winding_number.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "test_util.h"
 
@@ -92,22 +93,29 @@ TEST(OnMesh, TetrahedronEdgesAndCornersTakeTheMeanOfBothSides) {
                                 {{0.25f, 0.25f, 0.5f}, 0.5}});
 }
 
-TEST(OnMesh, FloatSolidAngleCountsTrianglesThroughTheirPointsAsZero) {
-  // x on the triangle (inside, on an edge, on a corner) counts 0 in float and in double; beside
-  // it in its plane, and off its plane, the solid angle is its own (against the closed form of
-  // the octant triangle, π/2 from the origin).
+// One near triangle's Ω as the tree's near field takes it (TaylorSum::near): in float where
+// that is well-conditioned, else in double.
+float near_solid_angle(const vec3& a, const vec3& b, const vec3& c, const vec3& x) {
+  float omega;
+  if (near_solid_angle_float(a, b, c, x, omega)) return omega;
+  return float(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x)));
+}
+
+TEST(OnMesh, NearFieldCountsTrianglesThroughTheirPointsAsZero) {
+  // x on the triangle (inside, on an edge, on a corner) counts 0, in the float near field (which
+  // decides it in double) and in double; beside it in its plane, and off its plane, the solid
+  // angle is its own (the octant triangle's π/2 from the origin; ±2π at 1e-3 of its face).
   const vec3 a(2, 0, 0), b(0, 2, 0), c(0, 0, 2);
   for (const vec3& x : {vec3(1, 1, 0), vec3(0.5f, 0.5f, 1), vec3(2, 0, 0), vec3(0.25f, 0.75f, 1.0f)}) {
-    EXPECT_EQ(triangle_solid_angle(a, b, c, x), 0.0f);
+    EXPECT_EQ(near_solid_angle(a, b, c, x), 0.0f);
     EXPECT_EQ(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x)), 0.0);
   }
-  EXPECT_NEAR(triangle_solid_angle(a, b, c, vec3(2, 2, -2)), 0.0f, 1e-6f);  // in its plane, beside it
-  EXPECT_NEAR(triangle_solid_angle(a, b, c, vec3(0.0f)), float(kPi / 2), 1e-6f);
-  // Just off the plane the limits ±2π are kept: x at 1e-3 of the face on either side.
+  EXPECT_NEAR(near_solid_angle(a, b, c, vec3(2, 2, -2)), 0.0f, 1e-6f);  // in its plane, beside it
+  EXPECT_NEAR(near_solid_angle(a, b, c, vec3(0.0f)), float(kPi / 2), 1e-6f);
   const vec3 n = glm::normalize(vec3(1, 1, 1));
   const vec3 centre(2.0f / 3.0f);
-  EXPECT_NEAR(triangle_solid_angle(a, b, c, centre - 1e-3f * n), 2 * kPi, 0.01);
-  EXPECT_NEAR(triangle_solid_angle(a, b, c, centre + 1e-3f * n), -2 * kPi, 0.01);
+  EXPECT_NEAR(near_solid_angle(a, b, c, centre - 1e-3f * n), 2 * kPi, 0.01);
+  EXPECT_NEAR(near_solid_angle(a, b, c, centre + 1e-3f * n), -2 * kPi, 0.01);
 }
 
 // Item 4: |w| < n/2 for n triangles, so a level at or beyond it has no surface: no hit, no sheet

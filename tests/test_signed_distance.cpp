@@ -823,7 +823,9 @@ TEST(SignedDistance, NewtonReportsFailureWhereTheLevelIsOutOfReach) {
     std::printf("%s: stopped after %u iterations at %s, residual %g\n", c.what, r.projection.iterations,
                 str(r.projection.point).c_str(), r.projection.residual);
   }
-  const PointResult nan = evaluate(hemi, {vec3(kNaN, 0.0f, 0.0f)}, sdf_request(kFieldProjection))[0];
+  // (The batch drivers refuse a NaN point, validate_points; the per-point function a kernel calls
+  // must still not claim convergence for one.)
+  const PointResult nan = evaluate_point(hemi.view(), vec3(kNaN, 0.0f, 0.0f), sdf_request(kFieldProjection));
   EXPECT_FALSE(nan.projection.converged);
 }
 
@@ -1020,18 +1022,23 @@ TEST(SignedDistance, BadNewtonOptionsAndLevelsAreRefused) {
 }
 
 TEST(SignedDistance, NonFinitePointsDoNotCrash) {
-  // NaN and infinite points through every signed-distance field: no crash, no hang, and no
-  // finite sdf or converged projection claimed for a NaN point.
+  // NaN and infinite points through every signed-distance field: the batch refuses them naming the
+  // first (validate_points); the per-point function (what a kernel calls) does not crash or hang,
+  // and claims no finite sdf or converged projection for a NaN point.
   const GwnModel model = build_model(make_hemisphere(8, 32));
   const float inf = std::numeric_limits<float>::infinity();
   const std::vector<vec3> points = {{kNaN, 0.0f, 0.0f}, {0.0f, kNaN, 0.5f}, {kNaN, kNaN, kNaN},
                                     {inf, 0.0f, 0.0f},  {0.0f, 0.0f, -inf}, {0.1f, 0.1f, 0.1f}};
+  std::vector<PointResult> refused(points.size());
+  const Status status = evaluate_points(model, points, sdf_request(kFieldSignedDistance), refused);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("point 0 "), std::string::npos) << status.message();
   for (bool exact : {false, true}) {
-    const std::vector<PointResult> r =
-        evaluate(model, points,
-                 sdf_request(kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance | kFieldProjection |
-                                 kFieldHarnackBound | kFieldW,
-                             0.5f, exact));
+    const QueryRequest request = sdf_request(kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance |
+                                                 kFieldProjection | kFieldHarnackBound | kFieldW,
+                                             0.5f, exact);
+    std::vector<PointResult> r;
+    for (const vec3& x : points) r.push_back(evaluate_point(model.view(), x, request));
     for (size_t i = 0; i < 3; ++i) {
       EXPECT_FALSE(std::isfinite(r[i].sdf.distance)) << i << " sdf " << r[i].sdf.distance;
       EXPECT_FALSE(r[i].projection.converged) << i;
