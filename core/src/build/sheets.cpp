@@ -279,30 +279,6 @@ std::vector<LaneFrame> lane_frames(const TriangleTreeView& tree) {
   return out;
 }
 
-// visit_axis_crossings (trace/ray.h), less the lanes whose oriented box the ray's line misses: the
-// axis-aligned box of a cluster of slivers reaches across the whole fan (a crossing ray of the
-// classification met most of them), its oriented box is as thin as the cluster.
-template <class Visitor>
-void visit_axis_crossings_in_frames(const TriangleTreeView& tree, const LaneFrame* frames, const RayFrame& f,
-                                    Visitor&& visit) {
-  const dvec3 origin(f.origin);
-  uint32_t stack[kTraversalStackSize];
-  int sp = 0;
-  stack[sp++] = 0;
-  while (sp > 0) {
-    const uint32_t ni = stack[--sp];
-    const WideNode& node = tree.bvh.nodes[ni];
-    for (uint32_t mask = axis_ray_lane_mask(node, f, 0.0f); mask != 0; mask &= mask - 1) {
-      const int l = lowest_set_bit(mask);
-      if (frames[size_t(ni) * kBvhWidth + l].line_misses(origin, f.kz)) continue;
-      if (node.count[l] == 0)
-        stack[sp++] = node.child[l];
-      else
-        visit_axis_leaf(tree.vertices, node.child[l], node.count[l], f, 0.0f, visit);
-    }
-  }
-}
-
 // The multipole sum with the triangle and any triangle coincident with it at its centroid left
 // out. The centroid lies on those, where a solid angle is ±2π by which side round-off puts the
 // point, so they must not be summed; they are never in a far cluster (the centroid lies inside
@@ -385,10 +361,13 @@ void other_triangles_winding_by_crossings(const ModelView& view, std::span<float
       ahead += k;
       if (fabsf(t - delta) <= 0.5f * delta) stack += k;
     };
-    if (frames.empty())
-      visit_axis_crossings(tree.bvh, tree.vertices, frame, 0.0f, crossing);
-    else
-      visit_axis_crossings_in_frames(tree, frames.data(), frame, crossing);
+    // Less the lanes whose oriented box the ray's line misses, where the clusters are long: the
+    // axis-aligned box of a cluster of slivers reaches across the whole fan (a crossing ray of the
+    // classification met most of them), its oriented box is as thin as the cluster.
+    const dvec3 origin(frame.origin);
+    visit_axis_crossings(tree.bvh, tree.vertices, frame, 0.0f, crossing, 0, [&](uint32_t ni, const WideNode&, int l) {
+      return frames.empty() || !frames[size_t(ni) * kBvhWidth + l].line_misses(origin, frame.kz);
+    });
     // w at behind and at front (where the M crossings ahead are those of behind but the stack).
     // Their mean is w_o at c to second order in δ: the stack's own terms are ±(2π − h·A) at
     // heights ∓h over its plane, with A varying along the plane only at second order. Either side

@@ -312,8 +312,9 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
           if (stats) ++stats->mesh_crossings;
         },
         0,
-        [&](const WideNode& node, int lane) {
-          x_on_mesh = x_on_mesh || point_on_leaf(m.triangles, node, lane, x, pad);
+        [&](uint32_t, const WideNode& node, int lane) {
+          if (node.count[lane] > 0) x_on_mesh = x_on_mesh || point_on_leaf(m.triangles, node, lane, x, pad);
+          return true;
         });
     if (x_on_mesh) return winding_number_taylor<2, WantGradient, WantHessian>(m.triangles, x_in, cone_beta);
     WindingSample out;

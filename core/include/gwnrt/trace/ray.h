@@ -314,26 +314,29 @@ GWNRT_HD GWNRT_FORCEINLINE void visit_axis_leaf(const vec3* vertices, uint32_t f
 #endif
 }
 
-// A leaf hook that does nothing (visit_axis_crossings' default).
-struct NoLeafHook {
-  GWNRT_HD void operator()(const WideNode&, int) const {}
+// A lane hook that keeps every lane (visit_axis_crossings' default).
+struct KeepEveryLane {
+  GWNRT_HD bool operator()(uint32_t, const WideNode&, int) const { return true; }
 };
 
 // Calls visit(leaf index, t, jump) for every crossing of the axis ray's line with t >= t_min
 // (t_min <= 0 also reports crossings just behind the origin), in no particular order, over the
-// subtree below `root` (0: the whole tree); and leaf_hook(node, lane) for every leaf lane the ray
-// meets, before its crossings (every leaf whose box holds the origin among them).
-template <class Visitor, class LeafHook = NoLeafHook>
+// subtree below `root` (0: the whole tree). lane_hook(node index, node, lane) is asked about
+// every lane the ray meets (every leaf whose box holds the origin among them) before it is opened
+// or its crossings visited; false leaves the lane out (a caller that knows more of its shape).
+template <class Visitor, class LaneHook = KeepEveryLane>
 GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_min,
-                                          Visitor&& visit, uint32_t root = 0, LeafHook&& leaf_hook = {}) {
+                                          Visitor&& visit, uint32_t root = 0, LaneHook&& lane_hook = {}) {
   if (bvh.node_count == 0) return;
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = root;
   while (sp > 0) {
-    const WideNode& node = bvh.nodes[stack[--sp]];
+    const uint32_t ni = stack[--sp];
+    const WideNode& node = bvh.nodes[ni];
     for (uint32_t mask = axis_ray_lane_mask(node, f, t_min); mask != 0; mask &= mask - 1) {
       const int l = lowest_set_bit(mask);
+      if (!lane_hook(ni, node, l)) continue;
       if (node.count[l] == 0) {
 #if GWNRT_HOST_LANES
         // The walk is bound by node loads (perf on the dragon's sheet rays: the node's first
@@ -344,7 +347,6 @@ GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertic
         stack[sp++] = node.child[l];
         continue;
       }
-      leaf_hook(node, l);
       visit_axis_leaf(vertices, node.child[l], node.count[l], f, t_min, visit);
     }
   }
