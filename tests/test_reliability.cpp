@@ -98,7 +98,7 @@ TEST(OnMesh, TetrahedronEdgesAndCornersTakeTheMeanOfBothSides) {
 float near_solid_angle(const vec3& a, const vec3& b, const vec3& c, const vec3& x) {
   float omega;
   if (near_solid_angle_float(a, b, c, x, omega)) return omega;
-  return float(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x)));
+  return float(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x), true));
 }
 
 TEST(OnMesh, NearFieldCountsTrianglesThroughTheirPointsAsZero) {
@@ -108,7 +108,7 @@ TEST(OnMesh, NearFieldCountsTrianglesThroughTheirPointsAsZero) {
   const vec3 a(2, 0, 0), b(0, 2, 0), c(0, 0, 2);
   for (const vec3& x : {vec3(1, 1, 0), vec3(0.5f, 0.5f, 1), vec3(2, 0, 0), vec3(0.25f, 0.75f, 1.0f)}) {
     EXPECT_EQ(near_solid_angle(a, b, c, x), 0.0f);
-    EXPECT_EQ(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x)), 0.0);
+    EXPECT_EQ(triangle_solid_angle(dvec3(a), dvec3(b), dvec3(c), dvec3(x), true), 0.0);
   }
   EXPECT_NEAR(near_solid_angle(a, b, c, vec3(2, 2, -2)), 0.0f, 1e-6f);  // in its plane, beside it
   EXPECT_NEAR(near_solid_angle(a, b, c, vec3(0.0f)), float(kPi / 2), 1e-6f);

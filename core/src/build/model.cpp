@@ -212,7 +212,7 @@ Status GwnModel::set_sheet_level_unguarded(float level) {
 
 ModelView GwnModel::view() const {
   ModelView v;
-  v.triangles = triangles_.view();
+  v.triangles = triangle_view();
   v.boundary = boundary_tree_.view();
   v.cone = cone_.view();
   v.cone_boundary_lengths = cone_lengths_.data();

@@ -51,14 +51,17 @@ GWNRT_HD GWNRT_FORCEINLINE auto point_on_triangle(T numerator, T denominator, T 
   return (numerator <= round_off) & (-numerator <= round_off) & (denominator <= round_off);
 }
 
+// With mean_on_triangle, x on the triangle gives 0 (point_on_triangle; M's trees ask for it).
 template <class T>
 GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1, const glm::vec<3, T>& p2,
-                                       const glm::vec<3, T>& x) {
+                                       const glm::vec<3, T>& x, bool mean_on_triangle = false) {
   const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
   const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
   const SolidAngleTangent<T> tangent = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
-  if (point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc, T(kOnTriangleRoundOff))) return T(0);
+  if (mean_on_triangle &&
+      point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc, T(kOnTriangleRoundOff)))
+    return T(0);
   return T(2) * arctan2(tangent.numerator, tangent.denominator);
 }
 

@@ -310,7 +310,7 @@ struct TaylorSum {
       // Ill-conditioned: the derivatives' edge terms lose their digits there too (each long
       // edge's Biot–Savart term is ~1/h, and the terms of shared edges cancel), so all in double.
       const dvec3 q0(p0), q1(p1), q2(p2), xd(x);
-      acc.omega += float(triangle_solid_angle(q0, q1, q2, xd));
+      acc.omega += float(triangle_solid_angle(q0, q1, q2, xd, tree.mean_on_triangles));
       if constexpr (WantHessian) {
         dvec3 g;
         Sym3<double> h;
@@ -440,7 +440,7 @@ struct TaylorLanesSum {
       const auto corner = [&](int j) {
         return dvec3(pending.corners[3 * j][l], pending.corners[3 * j + 1][l], pending.corners[3 * j + 2][l]);
       };
-      omega[l] = float(triangle_solid_angle(corner(0), corner(1), corner(2), dvec3(x)));
+      omega[l] = float(triangle_solid_angle(corner(0), corner(1), corner(2), dvec3(x), tree.mean_on_triangles));
     }
     if (pending.count < kNearWidth) {  // the unused lanes hold stale corners
       inear lane;
@@ -514,7 +514,7 @@ GWNRT_HD inline WindingSampleExact winding_number_exact(const TriangleTreeView& 
   double omega = 0;
   for (uint32_t t = 0; t < tree.triangle_count; ++t) {
     const dvec3 p0(tree.vertices[3 * t]), p1(tree.vertices[3 * t + 1]), p2(tree.vertices[3 * t + 2]);
-    omega += triangle_solid_angle(p0, p1, p2, x);
+    omega += triangle_solid_angle(p0, p1, p2, x, tree.mean_on_triangles);
     if (want_hessian) {
       dvec3 g;
       Sym3<double> h;

@@ -61,7 +61,11 @@ class GwnModel {
   const TriangleTree& triangle_tree() const { return triangles_; }
   const BoundaryCurve& boundary() const { return boundary_; }
   const SegmentTree& boundary_tree() const { return boundary_tree_; }
-  TriangleTreeView triangle_view() const { return triangles_.view(); }
+  TriangleTreeView triangle_view() const {  // M's: mean_on_triangles
+    TriangleTreeView v = triangles_.view();
+    v.mean_on_triangles = true;
+    return v;
+  }
   SegmentTreeView boundary_view() const { return boundary_tree_.view(); }
   const TriangleTree& cone_tree() const { return cone_; }
   std::span<const WideNodeLength> cone_boundary_lengths() const { return cone_lengths_; }
