@@ -312,13 +312,12 @@ struct SumWithoutStack {
   // long edge (winding_number.h, kNearConditioning): only triangles it finds near enough to being
   // on are decided, in double.
   bool contains_x(const vec3& p0, const vec3& p1, const vec3& p2) const {
-    const vec3 a = p0 - sum.x, b = p1 - sum.x, c = p2 - sum.x;
-    const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-    const SolidAngleTangent<float> tangent = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
-    if (!point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc, kNearConditioning)) return false;
-    const dvec3 x(sum.x), q0(p0), q1(p1), q2(p2), da = q0 - x, db = q1 - x, dc = q2 - x;
-    const SolidAngleTangent<double> exact = solid_angle_tangent(da, db, dc, glm::length(da), glm::length(db),
-                                                                glm::length(dc), glm::cross(db, dc), glm::dot(db, dc));
+    float length_product;
+    const SolidAngleTangent<float> near = triangle_solid_angle_tangent(p0, p1, p2, sum.x, length_product);
+    if (!near_float_ill_conditioned(near, length_product)) return false;
+    const dvec3 x(sum.x), q0(p0), q1(p1), q2(p2);
+    double exact_length_product;
+    const SolidAngleTangent<double> exact = triangle_solid_angle_tangent(q0, q1, q2, x, exact_length_product);
     const double scale =
         std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), std::abs(q0.x), std::abs(q0.y), std::abs(q0.z),
                   std::abs(q1.x), std::abs(q1.y), std::abs(q1.z), std::abs(q2.x), std::abs(q2.y), std::abs(q2.z)});

@@ -257,12 +257,13 @@ GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode&
     if (!(node.lo[k][lane] - pad <= x[k] && x[k] <= node.hi[k][lane] + pad)) return false;
   for (uint32_t i = node.child[lane]; i < node.child[lane] + node.count[lane]; ++i) {
     const vec3 &p0 = tree.vertices[3 * i], &p1 = tree.vertices[3 * i + 1], &p2 = tree.vertices[3 * i + 2];
-    float omega;
-    if (near_solid_angle_float(p0, p1, p2, x, omega)) continue;  // well off the triangle
-    const dvec3 xd(x), a = dvec3(p0) - xd, b = dvec3(p1) - xd, c = dvec3(p2) - xd;
-    const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-    const SolidAngleTangent<double> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
-    if (point_on_triangle(t.numerator, t.denominator, la * lb * lc, kOnTriangleRoundOff)) return true;
+    float length_product;
+    const SolidAngleTangent<float> near = triangle_solid_angle_tangent(p0, p1, p2, x, length_product);
+    if (!near_float_ill_conditioned(near, length_product)) continue;  // well off the triangle
+    double exact_length_product;
+    const SolidAngleTangent<double> t =
+        triangle_solid_angle_tangent(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x), exact_length_product);
+    if (point_on_triangle(t.numerator, t.denominator, exact_length_product, kOnTriangleRoundOff)) return true;
   }
   return false;
 }

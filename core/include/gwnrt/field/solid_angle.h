@@ -52,15 +52,27 @@ GWNRT_HD GWNRT_FORCEINLINE auto point_on_triangle(T numerator, T denominator, T 
 }
 
 // With mean_on_triangle, x on the triangle gives 0 (point_on_triangle; M's trees ask for it).
+// The tangent of triangle (p0, p1, p2) seen from x, and |a||b||c| (the scale of its round-off).
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE SolidAngleTangent<T> triangle_solid_angle_tangent(const glm::vec<3, T>& p0,
+                                                                             const glm::vec<3, T>& p1,
+                                                                             const glm::vec<3, T>& p2,
+                                                                             const glm::vec<3, T>& x,
+                                                                             T& length_product) {
+  const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
+  const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+  length_product = la * lb * lc;
+  return solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+}
+
 template <class T>
 GWNRT_HD inline T triangle_solid_angle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1, const glm::vec<3, T>& p2,
                                        const glm::vec<3, T>& x, bool mean_on_triangle = false) {
-  const glm::vec<3, T> a = p0 - x, b = p1 - x, c = p2 - x;
-  const T la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-  const SolidAngleTangent<T> tangent = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
+  T length_product;
+  const SolidAngleTangent<T> tangent = triangle_solid_angle_tangent(p0, p1, p2, x, length_product);
   // atan2(0, 0) = 0 covers x on a vertex and zero-area triangles: they contribute nothing.
   if (mean_on_triangle &&
-      point_on_triangle(tangent.numerator, tangent.denominator, la * lb * lc, T(kOnTriangleRoundOff)))
+      point_on_triangle(tangent.numerator, tangent.denominator, length_product, T(kOnTriangleRoundOff)))
     return T(0);
   return T(2) * arctan2(tangent.numerator, tangent.denominator);
 }

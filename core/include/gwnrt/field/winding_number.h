@@ -282,14 +282,19 @@ GWNRT_HD GWNRT_FORCEINLINE void add_cluster_far_field(const TriangleTreeView& tr
 // float error of any other is then at most a few ε / kNearConditioning (≈ 1.5e-5 rad).
 inline constexpr float kNearConditioning = 1.0f / 64;
 
+// Whether float is ill-conditioned for a near triangle (kNearConditioning): what is then decided
+// in double, by the near field, the crossing method's on-M test and the sheets' stack test.
+GWNRT_HD GWNRT_FORCEINLINE bool near_float_ill_conditioned(const SolidAngleTangent<float>& t, float length_product) {
+  return point_on_triangle(t.numerator, t.denominator, length_product, kNearConditioning);
+}
+
 // Ω of one near triangle: in float where that is well-conditioned (true; its value in `omega`),
 // else false (the caller takes it in double).
 GWNRT_HD GWNRT_FORCEINLINE bool near_solid_angle_float(const vec3& p0, const vec3& p1, const vec3& p2, const vec3& x,
                                                        float& omega) {
-  const vec3 a = p0 - x, b = p1 - x, c = p2 - x;
-  const float la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-  const SolidAngleTangent<float> t = solid_angle_tangent(a, b, c, la, lb, lc, glm::cross(b, c), glm::dot(b, c));
-  if (point_on_triangle(t.numerator, t.denominator, la * lb * lc, kNearConditioning)) return false;
+  float length_product;
+  const SolidAngleTangent<float> t = triangle_solid_angle_tangent(p0, p1, p2, x, length_product);
+  if (near_float_ill_conditioned(t, length_product)) return false;
   omega = 2.0f * arctan2(t.numerator, t.denominator);
   return true;
 }
