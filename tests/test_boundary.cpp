@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -166,6 +167,123 @@ INSTANTIATE_TEST_SUITE_P(Meshes, BoundaryOnRealMeshes,
                            std::string name = info.param;
                            return name.substr(0, name.find('.'));
                          });
+
+// Random triangles over few vertices: a non-manifold soup whose ∂M is many short scattered
+// loops and edges of every multiplicity.
+Mesh make_random_soup(uint32_t seed, int vertices, int triangles) {
+  test::Random rng(seed);
+  Mesh m;
+  for (int i = 0; i < vertices; ++i) m.positions.push_back(rng.in_box({{0, 0, 0}, {1, 1, 1}}));
+  for (int t = 0; t < triangles; ++t)
+    m.triangles.push_back(
+        {uint32_t(rng.index(vertices)), uint32_t(rng.index(vertices)), uint32_t(rng.index(vertices))});
+  return m;
+}
+
+struct SpanningCase {
+  std::string name;
+  Mesh mesh;
+};
+
+std::vector<SpanningCase> spanning_cases() {
+  std::vector<SpanningCase> cases;
+  cases.push_back({"bunny_holes", load_test_mesh("bunny_holes.obj")});
+  cases.push_back({"teapot", load_test_mesh("teapot.obj")});
+  cases.push_back({"open cone of 3000", test::make_open_cone(3000)});
+  cases.push_back({"star polygon fan", test::make_fanned_polygon(2000, 0.5, {0.5, 0.5, 0.0}, 0.9)});
+  cases.push_back({"open hemisphere", test::make_hemisphere(12, 40)});
+  cases.push_back({"random soup", make_random_soup(11, 40, 200)});
+  return cases;
+}
+
+// ∂S = ∂M, as chains: every edge of S's triangles (zero-area ones too) counted with its
+// orientation, less the curve's segments, cancels, by exact position.
+TEST(SpanningSurface, BoundaryIsTheMeshBoundary) {
+  for (const SpanningCase& c : spanning_cases()) {
+    const BoundaryCurve curve = extract_boundary(c.mesh);
+    ASSERT_GT(curve.segment_count(), 0u) << c.name;
+    const SpanningSurface spanning = spanning_surface(curve);
+    std::map<Segment, int> chain;  // (min, max) -> count of min -> max
+    auto add = [&](const vec3& a, const vec3& b, int k) {
+      const Point pa = key(a + 0.0f), pb = key(b + 0.0f);
+      if (pa == pb) return;
+      if (pa < pb)
+        chain[{pa, pb}] += k;
+      else
+        chain[{pb, pa}] -= k;
+    };
+    for (const uvec3& t : spanning.mesh.triangles)
+      for (int k = 0; k < 3; ++k) add(spanning.mesh.positions[t[k]], spanning.mesh.positions[t[(k + 1) % 3]], 1);
+    for (size_t s = 0; s < curve.segment_count(); ++s) add(curve.endpoints[2 * s], curve.endpoints[2 * s + 1], -1);
+    size_t left = 0;
+    for (const auto& [edge, count] : chain) left += count != 0;
+    EXPECT_EQ(left, 0u) << c.name;
+    // A level has at most 3/4 of the segments of the one below (or the rest is one fan): S at
+    // most 4 times as many triangles as ∂M has segments. Along curves a level is about a quarter
+    // of the one below (two spokes a group of 8), so about 4/3 times; the one fan at the end is
+    // small there (the teapot's 64 segments end in 20) and may be large only for scattered loops.
+    const size_t n = curve.segment_count();
+    EXPECT_LE(spanning.mesh.triangles.size(), 4 * n + kSpanningGroup) << c.name;
+    if (c.name != "random soup") {
+      EXPECT_LE(spanning.mesh.triangles.size(), n * 3 / 2 + 4 * kSpanningGroup) << c.name;
+      EXPECT_LE(spanning.single_apex_segments, 4 * kSpanningGroup) << c.name;
+    }
+    std::printf("[ %-18s ] %zu segments: S %zu triangles, %zu of them from one apex at the end\n", c.name.c_str(), n,
+                spanning.mesh.triangles.size(), spanning.single_apex_segments);
+  }
+}
+
+// S and the cone C span the same curve, so w_S − w_C is a whole number off both (their union,
+// one reversed, is closed): checked with the brute-force sum in double at random points.
+TEST(SpanningSurface, FieldDiffersFromTheConesByWholeNumbers) {
+  for (const SpanningCase& c : spanning_cases()) {
+    const BoundaryCurve curve = extract_boundary(c.mesh);
+    uint32_t loops = 0;
+    const std::vector<uint32_t> loop_of_segment = boundary_loops(curve, loops);
+    const reference::ReferenceMesh spanning = reference::reference_mesh(spanning_surface(curve).mesh);
+    const reference::ReferenceMesh cone = reference::reference_mesh(boundary_cone(curve, loop_of_segment, loops));
+    test::Random rng(5);
+    Aabb box = test::mesh_bounds(c.mesh);
+    const vec3 pad = 0.2f * (box.hi - box.lo);
+    box = {box.lo - pad, box.hi + pad};
+    double worst = 0;
+    int not_zero = 0;
+    for (int k = 0; k < 200; ++k) {
+      const dvec3 x(rng.in_box(box));
+      const double difference = reference::reference_w(spanning, x) - reference::reference_w(cone, x);
+      worst = std::max(worst, std::fabs(difference - std::round(difference)));
+      not_zero += std::round(difference) != 0;
+    }
+    EXPECT_LT(worst, 1e-9) << c.name;
+    std::printf("[ %-18s ] max distance from a whole number %.1e; %d of 200 points where w_S != w_C\n", c.name.c_str(),
+                worst, not_zero);
+  }
+}
+
+// S stays near the curve: a triangle of a level reaches from its group's mean to one of the
+// group's segments, at most half the group's length along a circle, so a level's longest edges
+// add up to at most 8 halves of each group's length: 4 perimeters, over log_4 n levels. C's, from
+// the one apex, add up to n radii.
+TEST(SpanningSurface, StaysNearACircle) {
+  const int n = 100000;
+  const Mesh cone = test::make_open_cone(n);
+  const BoundaryCurve curve = extract_boundary(cone);
+  ASSERT_EQ(curve.segment_count(), size_t(n));
+  const SpanningSurface spanning = spanning_surface(curve);
+  double edges = 0;
+  for (const uvec3& t : spanning.mesh.triangles) {
+    double longest = 0;
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(
+          longest, glm::length(dvec3(spanning.mesh.positions[t[k]]) - dvec3(spanning.mesh.positions[t[(k + 1) % 3]])));
+    edges += longest;
+  }
+  const double perimeter = 2 * kPi * 0.5, levels = std::ceil(std::log(double(n)) / std::log(4.0));
+  EXPECT_LT(edges, 4.0 * perimeter * levels);
+  EXPECT_LE(spanning.mesh.triangles.size(), size_t(n) * 4 / 3 + kSpanningGroup);
+  std::printf("circle of %d segments: S has %zu triangles, longest edges %.1f (perimeter %.2f, %g levels)\n", n,
+              spanning.mesh.triangles.size(), edges, perimeter, levels);
+}
 
 }  // namespace
 }  // namespace gwnrt

@@ -26,6 +26,7 @@
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
 #include "mesh_files.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
@@ -787,17 +788,7 @@ TEST_F(LimitsCli, SizesBeyondMemoryAreRefusedUpFront) {
   }
 }
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+using test::kAddressSanitizer;
 
 // gwnrt-mesh's budget is the memory available when that is less than the mesher's 8 GiB: under
 // `ulimit -v` 1 GB, 1600 cells (1.7 GiB) are refused at once, saying so, where the mesher went on

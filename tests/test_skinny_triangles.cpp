@@ -241,31 +241,33 @@ TEST(SkinnyTriangles, MultipoleSheetJumpsMatchBruteForceOnDragon) {
   const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
   std::vector<Sides> sides(mesh.triangles.size());
   std::vector<bool> ill_posed(sides.size());
+  // Every triangle; an eighth of them under AddressSanitizer (all took a minute there).
+  const size_t stride = test::kAddressSanitizer ? 8 : 1;
+  std::vector<bool> sampled(sides.size());
   reference::parallel_over(sides.size(), [&](size_t t) {
-    if (std::isnan(model.other_winding()[t])) return;
+    if (std::isnan(model.other_winding()[t]) || t % stride != 0) return;
+    sampled[t] = true;
     sides[t] = reference_sides(ref, mesh, t, 1e-7);
     const Sides wider = reference_sides(ref, mesh, t, 4e-6 * ref.diagonal);
     ill_posed[t] = wider.jump != sides[t].jump || std::fabs(wider.other - sides[t].other) > 1e-5;
   });
   size_t checked = 0, other_jumps = 0;
   for (size_t t = 0; t < sides.size(); ++t) {
-    if (std::isnan(model.other_winding()[t]) || ill_posed[t]) continue;
+    if (!sampled[t] || ill_posed[t]) continue;
     ++checked;
     other_jumps += sides[t].jump != 1;
     EXPECT_EQ(int(model.sheet_jump()[t]), sides[t].jump) << "triangle " << t;
   }
-  EXPECT_GT(checked, sides.size() * 9 / 10);
+  EXPECT_GT(checked, sides.size() / stride * 9 / 10);
   std::printf("dragon_vrip_res4: %zu jumps checked, %zu of them not 1\n", checked, other_jumps);
 }
 
 // A closed cone: a fan of `n` triangles around its apex (not flat) and its base, a flat n-gon
 // fanned from one vertex.
 Mesh make_closed_cone(int n) {
-  Mesh m = test::make_fanned_polygon(n);
-  for (uvec3& t : m.triangles) std::swap(t[1], t[2]);  // the base faces down
-  const uint32_t apex = uint32_t(m.positions.size());
-  m.positions.push_back({0.5f, 0.5f, 0.5f});
-  for (uint32_t i = 0; i < uint32_t(n); ++i) m.triangles.push_back({apex, i, (i + 1) % uint32_t(n)});
+  Mesh m = test::make_open_cone(n, 0.5f);
+  Mesh base = test::make_fanned_polygon(n);                                  // the same rim, vertices 0 .. n-1
+  for (uvec3 t : base.triangles) m.triangles.push_back({t[0], t[2], t[1]});  // the base faces down
   return m;
 }
 
@@ -293,30 +295,32 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 // Found by this test's issue: the sheet classification evaluated w_o at every centroid with a
 // query that opens every cluster of a fan (each holds the fan's vertex and reaches across it):
-// 4.6 s at 10^4 vertices, 267 s at 10^5, a 10^6-gon never finished. The 2·10^5-gon here would
-// have taken some 20 minutes, past CTest's timeout. Timings are printed, not asserted (CI
-// machines vary). The sides are checked against the brute force at a sample of triangles, among
-// them the slivers next to the fan's vertex, where rounding the corners to float makes
-// neighbours overlap (jumps of 0 and 2); those where the brute force's sides depend on how far
-// off the centroid they are taken (SheetsOfFannedStarPolygonsMatchBruteForceSides), or that are
-// thinner than float resolution, are left out.
+// 4.6 s at 10^4 vertices, 267 s at 10^5, a 10^6-gon never finished; an open cone of 10^4 slivers
+// 4.6 s, 3·10^4 44 s. The 2·10^5-gon here would have taken some 20 minutes, past CTest's
+// timeout. Fans are now classified by crossings with the spanning surface (exact: tolerance
+// 1e-5), the closed ones by crossings alone. Timings are printed, not asserted (CI machines
+// vary); under AddressSanitizer the sizes are a tenth. The sides are checked against the brute
+// force at a sample of triangles, among them the slivers next to the fan's vertex, where rounding
+// the corners to float makes neighbours overlap (jumps of 0 and 2); those where the brute force's
+// sides depend on how far off the centroid they are taken
+// (SheetsOfFannedStarPolygonsMatchBruteForceSides), or that are thinner than float resolution,
+// are left out.
 TEST(SkinnyTriangles, FannedPolygonsOfHundredsOfThousandsBuild) {
   struct Big {
     std::string name;
     Mesh mesh;
-    double tolerance;  // of w_o: by crossings (auto for the closed ones) 1e-5, the multipole's 2e-3
   };
+  const int n = test::kAddressSanitizer ? 10000 : 100000;
   std::vector<Big> cases;
-  cases.push_back({"flat 2·10^5-gon", test::make_fanned_polygon(200000), kTaylorTolerance});
+  cases.push_back({"flat 2n-gon", test::make_fanned_polygon(2 * n)});
   // Tilted, the corners are rounded off the plane: a sliver's neighbours, within 1e-6 of its
-  // centroid, tilt by that rounding over their width, and the multipole's w_o, taken at the centroid
-  // rounded to float, is up to 7e-3 from the brute force's mean of the sides (before: up to 0.98
-  // at 3·10^4 vertices, most of it the float near field).
-  cases.push_back({"tilted 10^5-gon",
-                   test::make_fanned_polygon(100000, 0.5, {0.3, 0.2, 0.1}, 1.0, {0.6, 0.8, 0.0}, {-0.48, 0.36, 0.8}),
-                   1e-2});
-  cases.push_back({"closed cone, 10^5 around its apex", make_closed_cone(100000), 1e-5});
-  cases.push_back({"prism over a 10^5-gon", make_fanned_prism(100000), 1e-5});
+  // centroid, tilt by that rounding over their width (the multipole's w_o was up to 7e-3 from
+  // the brute force's mean of the sides there, and before that up to 0.98 at 3·10^4 vertices).
+  cases.push_back(
+      {"tilted n-gon", test::make_fanned_polygon(n, 0.5, {0.3, 0.2, 0.1}, 1.0, {0.6, 0.8, 0.0}, {-0.48, 0.36, 0.8})});
+  cases.push_back({"open cone, n around its apex", test::make_open_cone(n)});
+  cases.push_back({"closed cone, n around its apex", make_closed_cone(n)});
+  cases.push_back({"prism over an n-gon", make_fanned_prism(n)});
   for (Big& c : cases) {
     const Mesh mesh = c.mesh;
     const auto t0 = std::chrono::steady_clock::now();
@@ -329,7 +333,7 @@ TEST(SkinnyTriangles, FannedPolygonsOfHundredsOfThousandsBuild) {
                 mesh.triangles.size(), build, timing.tree_seconds, timing.boundary_seconds, timing.sheet_seconds,
                 crossing ? "crossing" : "taylor");
     std::vector<size_t> sample;
-    for (size_t t = 0; t < 20; ++t) sample.insert(sample.end(), {t, 99975 + t});  // next to the fan's vertex
+    for (size_t t = 0; t < 20; ++t) sample.insert(sample.end(), {t, size_t(n) - 25 + t});  // next to the fan's vertex
     test::Random rng(4);
     for (int k = 0; k < 150; ++k) sample.push_back(size_t(rng.index(int(mesh.triangles.size()))));
     const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
@@ -340,7 +344,7 @@ TEST(SkinnyTriangles, FannedPolygonsOfHundredsOfThousandsBuild) {
       const Sides wider = reference_sides(ref, mesh, sample[k], 4e-6 * ref.diagonal);
       ill_posed[k] = wider.jump != sides[k].jump || std::fabs(wider.other - sides[k].other) > 1e-5;
     });
-    ASSERT_EQ(crossing, c.tolerance == 1e-5) << c.name;
+    ASSERT_TRUE(crossing) << c.name;
     size_t checked = 0;
     for (size_t k = 0; k < sample.size(); ++k) {
       const size_t t = sample[k];
@@ -352,7 +356,7 @@ TEST(SkinnyTriangles, FannedPolygonsOfHundredsOfThousandsBuild) {
       const double perimeter = glm::length(p1 - p0) + glm::length(p2 - p1) + glm::length(p0 - p2);
       if (glm::length(glm::cross(p1 - p0, p2 - p0)) / perimeter < 1e-6) continue;
       ++checked;
-      EXPECT_NEAR(model.other_winding()[t], sides[k].other, c.tolerance) << c.name << " triangle " << t;
+      EXPECT_NEAR(model.other_winding()[t], sides[k].other, 1e-5) << c.name << " triangle " << t;
       EXPECT_EQ(int(model.sheet_jump()[t]), sides[k].jump) << c.name << " triangle " << t;
     }
     EXPECT_GT(checked, sample.size() * 3 / 4) << c.name;
@@ -364,15 +368,17 @@ TEST(SkinnyTriangles, FannedPolygonsOfHundredsOfThousandsBuild) {
 }
 
 // A query near a huge fan opens every cluster of it: bounded, O(n) a point, not a hang. Timed.
+// (A tenth of the size under AddressSanitizer.)
 TEST(SkinnyTriangles, QueriesNearAFanAreBounded) {
-  const GwnModel model = test::build_model(test::make_fanned_polygon(200000));
+  const int n = test::kAddressSanitizer ? 20000 : 200000;
+  const GwnModel model = test::build_model(test::make_fanned_polygon(n));
   const vec3 points[] = {{0.5f, 0.5f, -1e-4f}, {0.3f, 0.6f, 1e-3f}, {0.9f, 0.5f, 0.1f}, {0.5f, 0.5f, 2.0f}};
   for (const vec3& x : points) {
     const auto t0 = std::chrono::steady_clock::now();
     const float w = winding_number(model.triangle_view(), x, {2, 2.0f}).w;
     const double taylor = seconds_since(t0);
     EXPECT_NEAR(w, winding_number_exact(model.triangle_view(), x).w, kTaylorTolerance);
-    std::printf("2·10^5-gon fan: Taylor w at (%g, %g, %g) in %.2f ms\n", x.x, x.y, x.z, 1e3 * taylor);
+    std::printf("%d-gon fan: Taylor w at (%g, %g, %g) in %.2f ms\n", n, x.x, x.y, x.z, 1e3 * taylor);
   }
 }
 

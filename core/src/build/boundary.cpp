@@ -6,6 +6,7 @@
 #include <span>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include "gwnrt/geometry/boundary.h"
@@ -157,6 +158,115 @@ Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of
   cone.triangles.reserve(n);
   for (uint32_t s = 0; s < n; ++s) cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
   return cone;
+}
+
+namespace {
+
+struct Segment {
+  vec3 a, b;  // a -> b
+};
+
+// Reorders segments[begin, end) so that every run of kSpanningGroup (from begin) is compact: the
+// midpoints split at a multiple of the group size along their box's longest axis, recursively.
+void order_into_groups(std::vector<Segment>& segments, size_t begin, size_t end) {
+  const size_t count = end - begin;
+  if (count <= kSpanningGroup) return;
+  Aabb box;
+  for (size_t i = begin; i < end; ++i) box.extend(0.5f * (segments[i].a + segments[i].b));
+  const vec3 extent = box.hi - box.lo;
+  const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
+  const size_t half = (count / 2 + kSpanningGroup - 1) / kSpanningGroup * kSpanningGroup;  // < count
+  std::nth_element(segments.begin() + ptrdiff_t(begin), segments.begin() + ptrdiff_t(begin + half),
+                   segments.begin() + ptrdiff_t(end), [axis](const Segment& x, const Segment& y) {
+                     return x.a[axis] + x.b[axis] < y.a[axis] + y.b[axis];
+                   });
+  if (count < 4096) {
+    order_into_groups(segments, begin, begin + half);
+    order_into_groups(segments, begin + half, end);
+  } else {
+    tbb::parallel_invoke([&] { order_into_groups(segments, begin, begin + half); },
+                         [&] { order_into_groups(segments, begin + half, end); });
+  }
+}
+
+}  // namespace
+
+SpanningSurface spanning_surface(const BoundaryCurve& curve) {
+  SpanningSurface out;
+  std::vector<Segment> level(curve.segment_count());
+  for (size_t s = 0; s < level.size(); ++s) level[s] = {curve.endpoints[2 * s], curve.endpoints[2 * s + 1]};
+  auto fan = [&](const std::vector<Segment>& segments, size_t first, const vec3& apex, size_t begin, size_t end) {
+    for (size_t s = begin; s < end; ++s) {
+      const size_t t = first + s;
+      out.mesh.positions[3 * t] = apex;
+      out.mesh.positions[3 * t + 1] = segments[s].a;
+      out.mesh.positions[3 * t + 2] = segments[s].b;
+      out.mesh.triangles[t] = {uint32_t(3 * t), uint32_t(3 * t + 1), uint32_t(3 * t + 2)};
+    }
+  };
+  auto grow = [&](size_t more) {
+    out.mesh.positions.resize(out.mesh.positions.size() + 3 * more);
+    out.mesh.triangles.resize(out.mesh.triangles.size() + more);
+  };
+  auto mean = [](const std::vector<Segment>& segments, size_t begin, size_t end) {
+    dvec3 sum(0.0);
+    for (size_t s = begin; s < end; ++s) sum += dvec3(segments[s].a) + dvec3(segments[s].b);
+    return vec3(sum / double(2 * (end - begin)));
+  };
+  // ∂M is closed, and so is every level's curve: a level needs at most log_4 of the segments
+  // levels; the cap only guards against a curve that is not.
+  for (int depth = 0; !level.empty(); ++depth) {
+    const size_t first = out.mesh.triangles.size();
+    grow(level.size());
+    if (depth == 64) {
+      fan(level, first, mean(level, 0, level.size()), 0, level.size());
+      out.single_apex_segments = level.size();
+      break;
+    }
+    order_into_groups(level, 0, level.size());
+    const size_t groups = (level.size() + kSpanningGroup - 1) / kSpanningGroup;
+    // Per group, the spokes of −∂(its fan) less its segments: for an end v met k times more as
+    // a segment's end than as its start, k spokes v -> apex in ∂ of the fan, so k copies of
+    // apex -> v here (reversed for k < 0).
+    std::vector<std::array<Segment, 2 * kSpanningGroup>> spokes(groups);
+    std::vector<uint32_t> spoke_count(groups, 0);
+    tbb::parallel_for(size_t(0), groups, [&](size_t g) {
+      const size_t begin = g * kSpanningGroup, end = std::min(begin + kSpanningGroup, level.size());
+      const vec3 apex = mean(level, begin, end);
+      fan(level, first, apex, begin, end);
+      std::array<vec3, 2 * kSpanningGroup> ends;
+      std::array<int, 2 * kSpanningGroup> net{};
+      uint32_t distinct = 0;
+      auto add = [&](const vec3& v, int k) {
+        uint32_t i = 0;
+        while (i < distinct && !(ends[i] == v)) ++i;
+        if (i == distinct) ends[distinct++] = v;
+        net[i] += k;
+      };
+      for (size_t s = begin; s < end; ++s) {
+        add(level[s].b, 1);
+        add(level[s].a, -1);
+      }
+      for (uint32_t i = 0; i < distinct; ++i) {
+        if (ends[i] == apex) continue;  // a spoke of no length
+        for (int c = 0; c < std::abs(net[i]); ++c)
+          spokes[g][spoke_count[g]++] = net[i] > 0 ? Segment{apex, ends[i]} : Segment{ends[i], apex};
+      }
+    });
+    std::vector<Segment> next;
+    for (size_t g = 0; g < groups; ++g) next.insert(next.end(), spokes[g].begin(), spokes[g].begin() + spoke_count[g]);
+    // Spokes that stop shrinking (loose ends in every group: small loops scattered) are fanned
+    // from one apex, as C is.
+    if (4 * next.size() > 3 * level.size() && next.size() > kSpanningGroup) {
+      const size_t rest = out.mesh.triangles.size();
+      grow(next.size());
+      fan(next, rest, mean(next, 0, next.size()), 0, next.size());
+      out.single_apex_segments = next.size();
+      break;
+    }
+    level = std::move(next);
+  }
+  return out;
 }
 
 std::vector<ConeSegment> cone_segments(const TriangleTree& cone) {

@@ -19,6 +19,9 @@ namespace {
 constexpr float kSheetBetaCoarse = 1.5f;
 constexpr float kSheetBetaFine = 4.0f;
 constexpr float kSheetAmbiguity = 0.1f;
+// The most segments the spanning surface may end up fanning from one apex (a boundary of many
+// small scattered loops) for the sheets to be classified with it: past that it is C again.
+constexpr size_t kMaxSingleApexSegments = 256;
 
 // SmoothRegion per group of loops (see model_view.h). Groups: the loops themselves, or, beyond
 // kMaxSmoothRegions, runs of loops sorted along the axis where their centres spread most.
@@ -140,6 +143,18 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
   auto t2 = clock::now();
   model.max_leaf_triangles_ = options.max_leaf_triangles;
   model.sheet_method_ = resolve_winding_method(model.view(), options.sheet_method);
+  // A large ∂M (auto's crossing threshold) whose clusters are long, an open fan of slivers around
+  // one vertex: the multipole opens every cluster at every centroid, and C, a fan over ∂M, the
+  // same. By crossings with the spanning surface instead (its triangles near the part of ∂M they
+  // span), exact: an open cone of 10^4 slivers 4.6 s -> 0.05 s, of 10^5 0.42 s (design.md §4).
+  if (options.sheet_method == WindingMethod::kAuto && model.sheet_method_ == WindingMethod::kTaylor &&
+      clusters_are_long(model.triangles_.view())) {
+    SpanningSurface spanning = spanning_surface(model.boundary_);
+    if (spanning.single_apex_segments <= kMaxSingleApexSegments) {
+      model.spanning_ = std::move(spanning.mesh);
+      model.sheet_method_ = WindingMethod::kCrossing;
+    }
+  }
   if (options.classify_sheets) {
     if (Status s = model.set_sheet_level(options.sheet_level); !s.ok()) return s;
   }
@@ -161,7 +176,14 @@ Status GwnModel::set_sheet_level_unguarded(float level) {
     if (other_winding_.empty()) {  // exact, once for every level
       other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
       sheet_jump_.assign(mesh_.triangles.size(), 0);
-      other_triangles_winding_by_crossings(view(), other_winding_, sheet_jump_);
+      if (spanning_.triangles.empty()) {
+        other_triangles_winding_by_crossings(view(), view().cone, other_winding_, sheet_jump_);
+      } else {
+        TriangleTree spanning;
+        if (Status s = build_triangle_tree(spanning_, max_leaf_triangles_, spanning); !s.ok()) return s;
+        other_triangles_winding_by_crossings(view(), spanning.view(), other_winding_, sheet_jump_);
+        spanning_ = {};  // once for every level
+      }
     }
   } else {
     if (other_winding_.empty()) {  // the first classification: the coarse pass over all triangles

@@ -89,6 +89,8 @@ struct PointStats {
 // runs as before, without frames: their arrays' first touch alone took 0.16 s on 2 cores for the
 // sphere, whose whole classification by crossings takes 0.12 s.
 constexpr double kLongClusters = 32.0;
+}  // namespace
+
 bool clusters_are_long(const TriangleTreeView& tree) {
   double radii = 0, area = 0;
   for (uint32_t k = 0; k < tree.bvh.node_count; ++k) {
@@ -104,6 +106,8 @@ bool clusters_are_long(const TriangleTreeView& tree) {
   }
   return radii > kLongClusters * area;
 }
+
+namespace {
 
 // Every lane's LaneFrame (none where the clusters are not long), in three walks of the tree (the
 // root's four subtrees as tasks): up, the mean and scatter of each node's vertices; down, each
@@ -327,7 +331,8 @@ struct SumWithoutStack {
 };
 }  // namespace
 
-void other_triangles_winding_by_crossings(const ModelView& view, std::span<float> out, std::span<int8_t> jump) {
+void other_triangles_winding_by_crossings(const ModelView& view, const TriangleTreeView& spanning, std::span<float> out,
+                                          std::span<int8_t> jump) {
   const TriangleTreeView& tree = view.triangles;
   const vec3 extent = view.bounds.hi - view.bounds.lo;
   const float diagonal = glm::length(extent);
@@ -374,13 +379,13 @@ void other_triangles_winding_by_crossings(const ModelView& view, std::span<float
     // of the order δ / edge length (up to 9e-4 on the bundled meshes). A closed mesh has
     // whole-number sides, so its w_o is an exact half-integer.
     double w_behind = -double(ahead), w_front = double(stack - ahead);
-    if (view.cone.triangle_count > 0) {
+    if (spanning.triangle_count > 0) {
       using ConeSum = detail::ConeCrossingVisitor<false, false>::type;
-      ConeSum cone_behind(view.cone, frame, behind, kConeBeta, nullptr);
+      ConeSum cone_behind(spanning, frame, behind, kConeBeta, nullptr);
       cone_behind.traverse();
       w_behind += double(cone_behind.jumps) + double(cone_behind.winding());
       const RayFrame front_frame = make_ray_frame(front, direction);
-      ConeSum cone_front(view.cone, front_frame, front, kConeBeta, nullptr);
+      ConeSum cone_front(spanning, front_frame, front, kConeBeta, nullptr);
       cone_front.traverse();
       w_front += double(cone_front.jumps) + double(cone_front.winding());
     }

@@ -30,6 +30,22 @@ std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_
 // of M and C agree on shared edges).
 Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count);
 
+// A surface S with ∂S = ∂M whose triangles stay near the part of ∂M they span, where the cone's
+// reach from one apex across the whole loop: the segments are cut into compact groups of up to
+// kSpanningGroup (median splits of their midpoints); each group is fanned from its mean, which
+// leaves as its boundary the group's segments plus spokes from the mean to the group's loose ends;
+// those spokes, reversed, are a closed curve of a quarter the segments or fewer along a smooth
+// ∂M, spanned the same way, level by level. Used to classify the sheets of a fan whose cone is
+// itself a fan (sheets.h): a point sees O(log n) of S's clusters where it sees all of C's.
+inline constexpr std::size_t kSpanningGroup = 8;
+struct SpanningSurface {
+  Mesh mesh;  // a soup: three positions a triangle; zero-area triangles (a mean on its segment's line) kept
+  // Segments fanned from one apex at the end because a level's spokes stopped shrinking (a
+  // boundary of many small scattered loops, as in a soup): S is then no better than C there.
+  std::size_t single_apex_segments = 0;
+};
+SpanningSurface spanning_surface(const BoundaryCurve& curve);
+
 // Per cone triangle (leaf order), the segment of ∂M it carries (its edge 1 -> 2); per lane of
 // the cone's tree, the length of ∂M below it.
 std::vector<ConeSegment> cone_segments(const TriangleTree& cone);

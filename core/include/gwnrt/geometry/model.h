@@ -107,6 +107,7 @@ class GwnModel {
   float surface_margin_ = 0;
   std::vector<float> other_winding_;
   std::vector<int8_t> sheet_jump_;
+  Mesh spanning_;  // spanning_surface's, until the sheets are classified by crossings with it
   std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
   TriangleTree sheets_;
   float sheet_level_ = __builtin_nanf("");

@@ -25,8 +25,15 @@ void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t>
 // The same, exactly, by crossings (field/crossing_winding.h) at every triangle of view.triangles:
 // from the centroid, an axis ray that crosses the triangle at a slope of at most √3; the
 // crossings within round-off of the centroid are the triangle's stack, the rest and the cone
-// give w just past it.
-void other_triangles_winding_by_crossings(const ModelView& view, std::span<float> out, std::span<int8_t> jump);
+// give w just past it. `spanning` is the tree of a surface with boundary ∂M that stands in for
+// the cone C (view.cone, or spanning_surface's when C is a fan the multipole must open at every
+// centroid).
+void other_triangles_winding_by_crossings(const ModelView& view, const TriangleTreeView& spanning, std::span<float> out,
+                                          std::span<int8_t> jump);
+// Whether the tree's clusters are long: a cluster's ball holds far more centroids than its
+// triangles' area would suggest (a fan of slivers, every cluster of which reaches across it), so
+// that the multipole opens O(n) clusters at each centroid.
+bool clusters_are_long(const TriangleTreeView& tree);
 // Sides within this of w* count as equal to it, for the multipole's w_o (that accurate near the
 // threshold): then {w > w*} holds on the upper side only when it is really above, so a closed
 // mesh is all sheets for w* = 0 and none for w* = 1, not a coin toss. Exact values (crossings)
