@@ -228,6 +228,23 @@ TEST(CrossingWinding, MatchesBruteForceOnMeshesAndSoups) {
   }
 }
 
+// BuildOptions allows leaves of up to kMaxLeafSize triangles; the host's cone sum took a near
+// leaf four triangles at a time and left out the rest (w up to 0.5 off with leaves of 8).
+TEST(CrossingWinding, EveryLeafSizeMatchesBruteForce) {
+  const Mesh mesh = load_test_mesh("bunny_holes.obj");
+  const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
+  const std::vector<vec3> points = test::sample_points(test::mesh_bounds(mesh), 400, 5);
+  for (const uint32_t leaf : {1u, 5u, 8u, kMaxLeafSize}) {
+    BuildOptions options;
+    options.max_leaf_triangles = leaf;
+    GwnModel model;
+    ASSERT_TRUE(GwnModel::build(mesh, model, options).ok());
+    const Comparison r = compare_with_brute_force("leaves of " + std::to_string(leaf), model, ref, points);
+    EXPECT_GT(r.compared, 300u);
+    std::printf("[ leaves of %2u ] max |dw| %.2e over %zu points\n", leaf, r.max_error, r.compared);
+  }
+}
+
 // Points from which the ray (the shortest axis exit, shortest_exit_axis_ray) passes exactly
 // through `target`: target moved back along each axis direction by `back`, kept where that
 // direction is the one the method picks. The other two coordinates equal the target's exactly.

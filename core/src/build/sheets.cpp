@@ -337,34 +337,12 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
   const vec3 extent = view.bounds.hi - view.bounds.lo;
   const float diagonal = glm::length(extent);
   const std::vector<LaneFrame> frames = lane_frames(tree);
-  tbb::parallel_for(uint32_t(0), tree.triangle_count, [&](uint32_t i) {
-    const vec3 &p0 = tree.vertices[3 * i], &p1 = tree.vertices[3 * i + 1], &p2 = tree.vertices[3 * i + 2];
-    const vec3 centroid = (p0 + p1 + p2) / 3.0f;
-    const vec3 normal = glm::cross(p1 - p0, p2 - p0);
-    // The ray crosses the triangle at a slope of at most √3 (some axis has |n_k| >= |n|/√3), so
-    // that it leaves the triangle's plane at once.
-    const vec3 an = glm::abs(normal);
-    const float largest = max_of(an.x, max_of(an.y, an.z));
-    const uint32_t axes =
-        (an.x >= 0.5f * largest ? 1u : 0u) | (an.y >= 0.5f * largest ? 2u : 0u) | (an.z >= 0.5f * largest ? 4u : 0u);
-    // Two points on the ray d through the centroid c, behind = c − δd and front = c + δd, on either
-    // side of the triangle's stack (it and any triangle coincident with it at c): the crossings
-    // within δ/2 of c seen from behind are the stack, their jumps k. δ is far above the rounding
-    // of the centroid and of the vertices relative to it (a few ulps of the coordinates), and far
-    // below any feature a mesh resolves. (Not c itself: a stacked copy that is a loop of ∂M on
-    // its own has c as its cone's apex, where w_C is undefined.)
-    const float delta = 2e-6f * (diagonal + max_of(fabsf(centroid.x), max_of(fabsf(centroid.y), fabsf(centroid.z))));
-    const RayFrame axis = shortest_exit_axis_ray(view.bounds, centroid, axes);
-    vec3 direction(0.0f), behind = centroid, front = centroid;
-    direction[axis.kz] = axis.sz;  // ±1
-    behind[axis.kz] -= axis.sz * delta;
-    front[axis.kz] += axis.sz * delta;
-    const RayFrame frame = make_ray_frame(behind, direction);
-    int ahead = 0, stack = 0;
-    auto crossing = [&](uint32_t, float t, int k) {
-      ahead += k;
-      if (fabsf(t - delta) <= 0.5f * delta) stack += k;
-    };
+  // w at x, exactly: w_S(x) less M's jumps ahead of x plus S's, along the axis ray that leaves the
+  // box soonest (field/crossing_winding.h).
+  const auto winding_at = [&](const vec3& x) {
+    const RayFrame frame = shortest_exit_axis_ray(view.bounds, x);
+    int ahead = 0;
+    auto crossing = [&](uint32_t, float, int k) { ahead += k; };
     // Less the lanes whose oriented box the ray's line misses, where the clusters are long: the
     // axis-aligned box of a cluster of slivers reaches across the whole fan (a crossing ray of the
     // classification met most of them), its oriented box is as thin as the cluster.
@@ -372,28 +350,37 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
     visit_axis_crossings(tree.bvh, tree.vertices, frame, 0.0f, crossing, 0, [&](uint32_t ni, const WideNode&, int l) {
       return frames.empty() || !frames[size_t(ni) * kBvhWidth + l].line_misses(origin, frame.kz);
     });
-    // w at behind and at front (where the M crossings ahead are those of behind but the stack).
-    // Their mean is w_o at c to second order in δ: the stack's own terms are ±(2π − h·A) at
-    // heights ∓h over its plane, with A varying along the plane only at second order. Either side
-    // alone, less its own terms, is off by δ·|∇w_o|, which beside the neighbouring triangles is
-    // of the order δ / edge length (up to 9e-4 on the bundled meshes). A closed mesh has
-    // whole-number sides, so its w_o is an exact half-integer.
-    double w_behind = -double(ahead), w_front = double(stack - ahead);
+    double w = -double(ahead);
     if (spanning.triangle_count > 0) {
       using ConeSum = detail::ConeCrossingVisitor<false, false>::type;
-      ConeSum cone_behind(spanning, frame, behind, kConeBeta, nullptr);
-      cone_behind.traverse();
-      w_behind += double(cone_behind.jumps) + double(cone_behind.winding());
-      const RayFrame front_frame = make_ray_frame(front, direction);
-      ConeSum cone_front(spanning, front_frame, front, kConeBeta, nullptr);
-      cone_front.traverse();
-      w_front += double(cone_front.jumps) + double(cone_front.winding());
+      ConeSum cone(spanning, frame, x, kConeBeta, nullptr);
+      cone.traverse();
+      w += double(cone.jumps) + double(cone.winding());
     }
-    // k relative to the triangle's own normal: its own jump along d is +1 when d runs from the
-    // side its normal points to onto the other (normal·d < 0).
-    const int own_count = normal[axis.kz] * axis.sz < 0.0f ? stack : -stack;
+    return w;
+  };
+  tbb::parallel_for(uint32_t(0), tree.triangle_count, [&](uint32_t i) {
+    const dvec3 p0(tree.vertices[3 * i]), p1(tree.vertices[3 * i + 1]), p2(tree.vertices[3 * i + 2]);
+    const dvec3 centroid = (p0 + p1 + p2) / 3.0;
+    const dvec3 normal = glm::cross(p1 - p0, p2 - p0);  // in double: a sliver's is exact, not float noise
+    const double area2 = glm::length(normal);
+    // w at behind = c − δu and front = c + δu along the unit normal u, on either side of the
+    // triangle's stack (it and any triangle coincident with it at c): their difference is the
+    // stack's jump k, their mean w_o at c to second order in δ. Along the normal, not along the
+    // ray's axis: a tilted offset moves the two points apart across the plane too, and beside a
+    // sliver's neighbours w_o then errs by that shift times δ over the squared width (a tilted
+    // 10^4-gon's slivers by the fan's vertex were up to 3e-4 off the brute force's sides). δ is
+    // far above the rounding of the centroid and of the vertices relative to it (a few ulps of the
+    // coordinates), and far below any feature a mesh resolves. (Not c itself: a stacked copy that
+    // is a loop of ∂M on its own has c as its cone's apex, where w_C is undefined.) A closed mesh
+    // has whole-number sides, so its w_o is an exact half-integer.
+    const double delta =
+        2e-6 * (double(diagonal) + std::max({std::abs(centroid.x), std::abs(centroid.y), std::abs(centroid.z)}));
+    const dvec3 u = area2 > 0.0 ? normal / area2 : dvec3(0.0, 0.0, 1.0);  // zero area: no side of its own
+    const double w_behind = winding_at(vec3(centroid - delta * u)), w_front = winding_at(vec3(centroid + delta * u));
+    const long own = area2 > 0.0 ? std::lround(w_behind - w_front) : 0;
     out[tree.triangle_ids[i]] = float(0.5 * (w_behind + w_front));
-    jump[tree.triangle_ids[i]] = int8_t(own_count < -127 ? -127 : (own_count > 127 ? 127 : own_count));
+    jump[tree.triangle_ids[i]] = int8_t(own < -127 ? -127 : (own > 127 ? 127 : own));
   });
 }
 

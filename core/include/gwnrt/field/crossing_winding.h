@@ -188,7 +188,11 @@ struct ConeCrossingLanes {
     for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
       add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
   }
+  // A leaf's triangles four at a time (BuildOptions allows leaves of up to kMaxLeafSize).
   GWNRT_FORCEINLINE void near_leaf(uint32_t first, uint32_t count) {
+    for (uint32_t done = 0; done < count; done += 4) near_quad(first + done, count - done < 4 ? count - done : 4);
+  }
+  GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
     const vec3* v = cone.vertices + 3 * first;
     const uint32_t last = count - 1;
     const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
