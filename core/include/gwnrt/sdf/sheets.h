@@ -24,9 +24,9 @@ void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t>
                              std::span<float> out, std::span<int8_t> jump);
 // The same, exactly, by crossings (field/crossing_winding.h) at every triangle of view.triangles:
 // w at two points just off the centroid along the triangle's normal, either side of its stack,
-// each from its own axis ray: their mean is w_o, their difference the stack's jump. `spanning` is the tree of a surface with boundary ∂M that stands in for
-// the cone C (view.cone, or spanning_surface's when C is a fan the multipole must open at every
-// centroid).
+// each from its own axis ray: their mean is w_o, their difference the stack's jump. `spanning` is
+// the tree of a surface with boundary ∂M that stands in for the cone C (view.cone, or
+// spanning_surface's when C is a fan the multipole must open at every centroid).
 void other_triangles_winding_by_crossings(const ModelView& view, const TriangleTreeView& spanning, std::span<float> out,
                                           std::span<int8_t> jump);
 // Whether the tree's clusters are long: a cluster's ball holds far more centroids than its
