@@ -187,6 +187,140 @@ TEST(ClosestPointOnSegment, MatchesDenseSampling) {
   EXPECT_EQ(c.u, 0.0);
 }
 
+// The branch-free squared distance the traversal ranks a leaf's triangles by (triangle_distance2),
+// scalar and four lanes at once, against the double brute force of the same float corners, on
+// proper triangles down to slivers and needles and on zero-area ones (collinear, repeated
+// corners, a point), from points near and far. Float corners and points of O(1) coordinates:
+// the distance is within a few ulps of them, 1e-6.
+TEST(TriangleDistance2, MatchesBruteForceOnEveryKindOfTriangle) {
+  std::mt19937 rng(21);
+  std::vector<Tri> tris = proper_triangles(rng, 40);
+  for (const Tri& t : zero_area_triangles(rng, 20)) tris.push_back(t);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  double worst = 0;
+  for (size_t ti = 0; ti < tris.size(); ++ti) {
+    const vec3 c[3] = {vec3(tris[ti].p0), vec3(tris[ti].p1), vec3(tris[ti].p2)};
+    for (int k = 0; k < 40; ++k) {
+      const vec3 centre = (c[0] + c[1] + c[2]) / 3.0f;
+      const vec3 x = k % 4 == 0
+                         ? c[k / 4 % 3]  // on a corner
+                         : (k % 2 ? vec3(u(rng), u(rng), u(rng)) : centre + 0.05f * vec3(u(rng), u(rng), u(rng)));
+      const double ref = reference::triangle_distance(c[0], c[1], c[2], dvec3(x));
+      const float p[3][3] = {{c[0].x, c[0].y, c[0].z}, {c[1].x, c[1].y, c[1].z}, {c[2].x, c[2].y, c[2].z}};
+      const float xs[3] = {x.x, x.y, x.z};
+      const double scalar = std::sqrt(double(triangle_distance2(p, xs)));
+      SCOPED_TRACE(std::string(tris[ti].kind) + " #" + std::to_string(ti) + ", query " + std::to_string(k));
+      EXPECT_NEAR(scalar, ref, 1e-6);
+      // A corner is on its triangle: its edge's t is 1 but for rounding (fused multiply-adds may
+      // round x's dot product and the edge's own differently), two ulps of the coordinates.
+      if (k % 4 == 0) {
+        EXPECT_LE(scalar, 2.4e-7 * 2.0) << "a corner is on its triangle";
+      }
+      worst = std::max(worst, std::abs(scalar - ref));
+#if GWNRT_HOST_LANES
+      // The same triangle in every lane but one, which holds another: lanes do not mix.
+      const Tri& other = tris[(ti + 1) % tris.size()];
+      const vec3 o[3] = {vec3(other.p0), vec3(other.p1), vec3(other.p2)};
+      f4 pl[3][3], xl[3];
+      for (int a = 0; a < 3; ++a) {
+        for (int q = 0; q < 3; ++q) pl[q][a] = f4{c[q][a], o[q][a], c[q][a], c[q][a]};
+        xl[a] = splat<f4>(x[a]);
+      }
+      const f4 lanes = triangle_distance2(pl, xl);
+      for (int l : {0, 2, 3}) EXPECT_NEAR(std::sqrt(double(lanes[l])), ref, 1e-6) << "lane " << l;
+      EXPECT_NEAR(std::sqrt(double(lanes[1])), reference::triangle_distance(o[0], o[1], o[2], dvec3(x)), 1e-6);
+#endif
+    }
+  }
+  std::printf("[ triangle_distance2 ] %zu triangles: max |d - brute force| %.2e\n", tris.size(), worst);
+}
+
+// Points where the traversal's choices are close calls, against the brute force and between the
+// host's four-wide path and the scalar one (the device's): every vertex and edge midpoint of a
+// mesh, points just off the slivers of a fanned polygon and on them, points exactly between two
+// parallel squares (either square is right), and points far away (10^3 and 10^6 diagonals).
+TEST(UnsignedDistance, VerticesEdgesSliversTiesAndFarPoints) {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+  };
+  Mesh squares;
+  squares.positions = {{0, 0, -1}, {1, 0, -1}, {1, 1, -1}, {0, 1, -1}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  squares.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 6, 5}, {4, 7, 6}};
+  std::vector<Case> cases;
+  cases.push_back({"bunny_holes", load_test_mesh("bunny_holes.obj")});
+  cases.push_back({"fanned 2000-gon", test::make_fanned_polygon(2000)});
+  cases.push_back({"two parallel squares", squares});
+  for (Case& c : cases) {
+    const Mesh mesh = c.mesh;
+    const GwnModel model = build_model(std::move(c.mesh));
+    const Aabb box = mesh_bounds(mesh);
+    const double diag = glm::length(dvec3(box.hi - box.lo));
+    std::vector<vec3> points;
+    for (const vec3& p : mesh.positions) points.push_back(p);
+    for (size_t t = 0; t < mesh.triangles.size(); t += std::max<size_t>(1, mesh.triangles.size() / 2000)) {
+      const vec3 a = mesh.positions[mesh.triangles[t][0]], b = mesh.positions[mesh.triangles[t][1]],
+                 d = mesh.positions[mesh.triangles[t][2]];
+      const vec3 n = glm::cross(b - a, d - a), centroid = (a + b + d) / 3.0f;
+      points.push_back(0.5f * (a + b));
+      points.push_back(centroid);
+      if (glm::length(n) > 0) points.push_back(centroid + 1e-4f * float(diag) * glm::normalize(n));
+    }
+    test::Random rng(31);
+    for (int k = 0; k < 200; ++k) {
+      const vec3 dir = glm::normalize(vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+      points.push_back(box.centre() + (k % 2 ? 1e3f : 1e6f) * float(diag) * dir);
+    }
+    if (&c == &cases[2])
+      for (int k = 0; k < 100; ++k) points.push_back({rng.uniform(0, 1), rng.uniform(0, 1), 0.0f});
+    const TriangleTreeView view = model.triangle_view();
+    size_t checked = 0;
+    for (const vec3& x : points) {
+      const NearestPrimitive lanes = unsigned_distance(view, x);
+      const NearestPrimitive scalar =
+          detail::nearest_primitive<detail::TriangleLeaves, false>(view.bvh, view.triangle_ids, x, {view.vertices});
+      const double ref = mesh_distance(mesh, dvec3(x));
+      SCOPED_TRACE(std::string(c.name) + ": x = (" + std::to_string(x.x) + ", " + std::to_string(x.y) + ", " +
+                   std::to_string(x.z) + ")");
+      // Float coordinates of x and of M: a few ulps of the larger of |x| and the box.
+      const double tol = 1e-6 * std::max(diag, double(glm::length(x)));
+      ASSERT_LT(lanes.primitive, mesh.triangles.size());
+      EXPECT_NEAR(lanes.distance, ref, tol);
+      EXPECT_NEAR(triangle_distance(mesh, lanes.primitive, dvec3(x)), ref, tol);
+      // The two paths rank by the same formula, which the compiler may fuse differently in each
+      // (x - t e rounds to an ulp of the coordinates, 1.2e-7 of them): four ulps. A tie may go
+      // either way, at the same distance.
+      EXPECT_NEAR(scalar.distance, lanes.distance, 4.8e-7 * std::max(diag, double(glm::length(x))));
+      if (scalar.primitive != lanes.primitive) {
+        EXPECT_NEAR(triangle_distance(mesh, scalar.primitive, dvec3(x)), ref, tol);
+      }
+      ++checked;
+    }
+    std::printf("[ %-20s ] %zu points: vertices, edge midpoints, centroids, just off, far\n", c.name, checked);
+  }
+}
+
+// The boundary's segments by both paths, against the brute force.
+TEST(BoundaryDistance, FourWideMatchesScalarPath) {
+  const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));
+  const SegmentTreeView view = model.boundary_view();
+  const BoundaryCurve& curve = model.boundary();
+  const Aabb box = mesh_bounds(model.mesh());
+  const double diag = glm::length(dvec3(box.hi - box.lo));
+  std::vector<vec3> points = sample_points(box, 1000, 17);
+  for (const vec3& p : curve.endpoints) points.push_back(p);
+  for (const vec3& x : points) {
+    const NearestPrimitive lanes = boundary_distance(view, x);
+    const NearestPrimitive scalar =
+        detail::nearest_primitive<detail::SegmentLeaves, false>(view.bvh, view.segment_ids, x, {view.endpoints});
+    const double ref = boundary_distance(curve, dvec3(x));
+    // As for triangles: ulps of the larger of |x| and the box.
+    const double scale = std::max(diag, double(glm::length(x)));
+    EXPECT_NEAR(lanes.distance, ref, 1e-6 * scale);
+    EXPECT_NEAR(scalar.distance, lanes.distance, 4.8e-7 * scale);
+  }
+}
+
 class DistanceOnRealMeshes : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(DistanceOnRealMeshes, UnsignedDistanceMatchesBruteForce) {

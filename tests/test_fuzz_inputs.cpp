@@ -701,8 +701,14 @@ TEST_F(FuzzCli, BenchQuery) {
   if (b.empty()) GTEST_SKIP() << "gwnrt-bench-query is not built next to the tests";
   ProgramCase c{b, quote(open_mesh_), {{"--points", "64"}, {"--brute-seconds", "0.05"}}};
   // A budget of 1e39 s made the brute-force subset's growth overflow its integer arithmetic.
-  c.options = {{"--points"},  {"--beta"}, {"--brute-seconds", {"nan", "-1", "1e39", "inf"}},
-               {"--threads"}, {"--seed"}, {"--json", {"", "/proc/x.json", out("no/such/dir/x.json"), "/dev/full"}}};
+  c.options = {{"--points"},
+               {"--beta"},
+               {"--brute-seconds", {"nan", "-1", "1e39", "inf"}},
+               {"--threads"},
+               {"--seed"},
+               {"--only", {"", "no such mode"}},
+               {"--baseline-json", {"", out("none.json"), "/dev/null", "/dev/zero", "/proc/self/status"}},
+               {"--json", {"", "/proc/x.json", out("no/such/dir/x.json"), "/dev/full"}}};
   for (const std::string& m : hostile_meshes(11)) c.extra.push_back(quote(m) + " --points 64 --brute-seconds 0.05");
   add_shape_errors(c, true);
   run_program_case(c);

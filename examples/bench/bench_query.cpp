@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -84,6 +85,12 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "worker threads (default: all cores)")
       ->check(gwnrt::examples::positive_number());
   app.add_option("--seed", seed, "random seed of the point mix");
+  std::string only;
+  app.add_option("--only", only, "time only the modes whose name contains this (e.g. distance)");
+  std::string baseline_path;
+  app.add_option("--baseline-json", baseline_path,
+                 "another build's --json of this benchmark (same mesh, points and seed): each mode's throughput "
+                 "as a ratio to it (scripts/bench-distance.sh runs the two interleaved)");
   std::string json_path;
   app.add_option("--json", json_path, "also write every row and the build timings to this JSON file");
   CLI11_PARSE(app, argc, argv);
@@ -94,6 +101,27 @@ int main(int argc, char** argv) {
                               "--points " + std::to_string(count));
       !s.ok())
     return examples::fail(kProgram, s.message());
+  // The baseline's queries/s by mode ("signed distance (sdf)" was renamed "..., auto": a mode
+  // matches a baseline mode it equals or begins with, followed by a comma).
+  std::vector<std::pair<std::string, double>> baseline;
+  if (!baseline_path.empty()) {
+    std::ifstream file(baseline_path);
+    if (!file) return examples::fail(kProgram, baseline_path + ": cannot read");
+    const nlohmann::json j = nlohmann::json::parse(file, nullptr, false);
+    if (j.is_discarded() || !j.contains("rows") || !j["rows"].is_array())
+      return examples::fail(kProgram, baseline_path + ": not a JSON file of this benchmark (no \"rows\" array)");
+    for (const nlohmann::json& row : j["rows"]) {
+      if (!row.is_object() || !row.contains("mode") || !row["mode"].is_string() ||
+          !row.contains("queries_per_second") || !row["queries_per_second"].is_number())
+        return examples::fail(kProgram, baseline_path + ": a row without \"mode\" and \"queries_per_second\"");
+      baseline.emplace_back(row["mode"].get<std::string>(), row["queries_per_second"].get<double>());
+    }
+  }
+  auto baseline_rate = [&](const std::string& mode) -> double {
+    for (const auto& [name, rate] : baseline)
+      if (mode == name || (mode.rfind(name + ",", 0) == 0)) return rate;
+    return NAN;
+  };
   const examples::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
 
@@ -171,6 +199,7 @@ int main(int argc, char** argv) {
                         {"Harnack lower bound", WindingMethod::kAuto, 2, kFieldHarnackBound},
                         {"Newton projection, auto", WindingMethod::kAuto, 2, kFieldProjection}};
   for (const Mode& m : modes) {
+    if (!only.empty() && std::string(m.name).find(only) == std::string::npos) continue;
     QueryRequest request;
     request.method = m.method;
     request.taylor = {m.order, beta};
@@ -191,10 +220,21 @@ int main(int argc, char** argv) {
   };
 
   const double base = rows[0].rate();
-  std::printf("%-30s %10s %14s %12s %14s\n", "mode", "points", "queries/s", "x brute", "max |dw|");
+  std::printf("%-30s %10s %14s %12s %14s%s\n", "mode", "points", "queries/s", "x brute", "max |dw|",
+              baseline.empty() ? "" : "     x baseline");
   for (const Row& r : rows) {
     std::printf("%-30s %10zu %14.4g %12.4g", r.mode.c_str(), r.points, r.rate(), r.rate() / base);
-    if (!std::isnan(r.max_error) && &r != &rows[0]) std::printf(" %14.3g", r.max_error);
+    if (!std::isnan(r.max_error) && &r != &rows[0])
+      std::printf(" %14.3g", r.max_error);
+    else if (!baseline.empty())
+      std::printf(" %14s", "");
+    if (!baseline.empty() && &r != &rows[0]) {
+      const double b = baseline_rate(r.mode);
+      if (std::isnan(b))
+        std::printf(" %14s", "(not in it)");
+      else
+        std::printf(" %14.3g", r.rate() / b);
+    }
     std::printf("\n");
   }
   const double w2 = rate_of("w, Taylor order 2");
@@ -247,6 +287,9 @@ int main(int argc, char** argv) {
                        {"points", r.points},
                        {"queries_per_second", r.rate()},
                        {"ratio_to_brute_force", r.rate() / base},
+                       {"ratio_to_baseline", baseline.empty() || &r == &rows[0] || std::isnan(baseline_rate(r.mode))
+                                                 ? nlohmann::json()
+                                                 : nlohmann::json(r.rate() / baseline_rate(r.mode))},
                        {"max_abs_error", std::isnan(r.max_error) ? nlohmann::json() : nlohmann::json(r.max_error)}});
     out["rows"] = table;
     std::ofstream file(json_path);

@@ -2,6 +2,7 @@
 // boundary curve ∂M, by near-first traversal of the wide BVH. Host-and-device.
 #pragma once
 
+#include "gwnrt/field/lanes.h"
 #include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
@@ -22,53 +23,109 @@ GWNRT_HD inline ClosestPoint<T> closest_point_on_segment(const glm::vec<3, T>& a
   return {a + t * ab, t, 0};
 }
 
-// Closest point of triangle (p0, p1, p2) to x, by the Voronoi region of x: vertex, edge or face.
-// A zero-area triangle has no face region and its region tests degenerate (they can pick a
-// wrong edge, or the face with a near-zero denominator), so it is treated as its three edges.
+// The nearest point of a triangle to x, branch-free, for one triangle (T = float or double) or
+// one per lane (T = f4 on the host: a leaf's four at once). p[k][a]: corner k's coordinate a.
+// Four candidates: the foot of x on the plane when it falls inside (barycentrics from the
+// normal), and the nearest point of each edge; the nearest of them is the answer. Ericson's region
+// tests, which this replaced, rest on products of differences that float cannot resolve on a
+// needle (corners 1e-5 of its length apart): 0.0103 where the distance is 9.8e-5. A zero-area
+// triangle has no foot inside (or its foot is a point of it anyway): its edges decide, as the
+// brute force measures it. Ties go to the face, then edges p0p1, p0p2, p1p2. Returns the squared
+// distance; u, v: barycentrics of the nearest point (point = (1 - u - v) p0 + u p1 + v p2).
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T triangle_nearest(const T (&p)[3][3], const T (&x)[3], T& u, T& v) {
+  T x0[3], x1[3], e1[3], e2[3], e3[3];
+  for (int a = 0; a < 3; ++a) {
+    x0[a] = x[a] - p[0][a];
+    x1[a] = x[a] - p[1][a];
+    e1[a] = p[1][a] - p[0][a];
+    e2[a] = p[2][a] - p[0][a];
+    e3[a] = p[2][a] - p[1][a];
+  }
+  const T zero{}, one = zero + 1.0f;
+  const auto dot = [](const T(&a)[3], const T(&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  const auto clamp01 = [&](T t) { return lane_select(t < zero, zero, lane_select(t > one, one, t)); };
+  const auto ratio = [&](T num, T den) { return clamp01(lane_select(den > zero, num / den, zero)); };
+  // Edges: t along each, and the squared distance to its point.
+  const T t1 = ratio(dot(x0, e1), dot(e1, e1)), t2 = ratio(dot(x0, e2), dot(e2, e2)),
+          t3 = ratio(dot(x1, e3), dot(e3, e3));
+  T d_ab = zero, d_ac = zero, d_bc = zero;
+  for (int a = 0; a < 3; ++a) {
+    const T ab = t1 * e1[a] - x0[a], ac = t2 * e2[a] - x0[a], bc = t3 * e3[a] - x1[a];
+    d_ab += ab * ab;
+    d_ac += ac * ac;
+    d_bc += bc * bc;
+  }
+  // The foot: u = n·(x0 × e2)/|n|², v = n·(e1 × x0)/|n|² (x's height over the plane drops out),
+  // the distance to it x's height (x0·n)²/|n|². n by differences of products to an ulp or two of
+  // itself: a sliver's plane from products that cancel to its width (a foot computed from u and v
+  // erred across a sliver 1.5e-3 wide by ten ulps of the coordinates). Where u and v are off
+  // (by about an ulp of x0 across the triangle) the edge's candidate is as near.
+  const T n[3] = {difference_of_products(e1[1], e2[2], e1[2], e2[1]),
+                  difference_of_products(e1[2], e2[0], e1[0], e2[2]),
+                  difference_of_products(e1[0], e2[1], e1[1], e2[0])};
+  const T m2[3] = {e2[1] * n[2] - e2[2] * n[1], e2[2] * n[0] - e2[0] * n[2], e2[0] * n[1] - e2[1] * n[0]};
+  const T m1[3] = {n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2], n[0] * e1[1] - n[1] * e1[0]};
+  const T nn = dot(n, n), height = dot(x0, n);
+  const T fu = lane_select(nn > zero, dot(x0, m2) / nn, -one), fv = lane_select(nn > zero, dot(x0, m1) / nn, -one);
+  const auto inside = (fu >= zero) & (fv >= zero) & (fu + fv <= one);
+  // height · (height / |n|²), not height² / |n|²: height² is the sixth power of the lengths,
+  // which underflows float at the smallest served scales (a mesh 1e-8 across: the distance was 0).
+  T d_face = lane_select(nn > zero, height * (height / nn), zero);
+  d_face = lane_select(inside, d_face, zero + kInfinity);
+  // The nearest, in the order of the ties: BC, AC, AB over each other, the face over them all.
+  T d = d_bc;
+  u = one - t3;
+  v = t3;
+  auto nearer = d_ac <= d;
+  d = lane_select(nearer, d_ac, d);
+  u = lane_select(nearer, zero, u);
+  v = lane_select(nearer, t2, v);
+  nearer = d_ab <= d;
+  d = lane_select(nearer, d_ab, d);
+  u = lane_select(nearer, t1, u);
+  v = lane_select(nearer, zero, v);
+  nearer = d_face <= d;
+  d = lane_select(nearer, d_face, d);
+  u = lane_select(nearer, fu, u);
+  v = lane_select(nearer, fv, v);
+  return d;
+}
+
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T triangle_distance2(const T (&p)[3][3], const T (&x)[3]) {
+  T u, v;
+  return triangle_nearest(p, x, u, v);
+}
+
+// Closest point of triangle (p0, p1, p2) to x (triangle_nearest).
 template <class T>
 GWNRT_HD inline ClosestPoint<T> closest_point_on_triangle(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                                           const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
-  using V = glm::vec<3, T>;
-  const V e1 = p1 - p0, e2 = p2 - p0, x0 = x - p0;
-  const V normal = glm::cross(e1, e2);
-  const T scale = glm::dot(e1, e1) * glm::dot(e2, e2);
-  if (!(glm::dot(normal, normal) > T(1e-12) * scale)) {
-    const ClosestPoint<T> c01 = closest_point_on_segment(p0, p1, x), c02 = closest_point_on_segment(p0, p2, x),
-                          c12 = closest_point_on_segment(p1, p2, x);
-    const T d01 = glm::dot(c01.point - x, c01.point - x), d02 = glm::dot(c02.point - x, c02.point - x),
-            d12 = glm::dot(c12.point - x, c12.point - x);
-    if (d01 <= d02 && d01 <= d12) return {c01.point, c01.u, 0};
-    if (d02 <= d12) return {c02.point, 0, c02.u};
-    return {c12.point, 1 - c12.u, c12.u};
+  const T p[3][3] = {{p0.x, p0.y, p0.z}, {p1.x, p1.y, p1.z}, {p2.x, p2.y, p2.z}}, xs[3] = {x.x, x.y, x.z};
+  T u, v;
+  (void)triangle_nearest(p, xs, u, v);
+  return {p0 + u * (p1 - p0) + v * (p2 - p0), u, v};
+}
+
+// Squared distance from x to a segment p[0] p[1], branch-free like triangle_distance2.
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T segment_distance2(const T (&p)[2][3], const T (&x)[3]) {
+  T x0[3], e[3];
+  for (int a = 0; a < 3; ++a) {
+    x0[a] = x[a] - p[0][a];
+    e[a] = p[1][a] - p[0][a];
   }
-  const T d1 = glm::dot(e1, x0), d2 = glm::dot(e2, x0);
-  if (d1 <= 0 && d2 <= 0) return {p0, 0, 0};
-  const V x1 = x - p1;
-  const T d3 = glm::dot(e1, x1), d4 = glm::dot(e2, x1);
-  if (d3 >= 0 && d4 <= d3) return {p1, 1, 0};
-  const T vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const T t = d1 - d3 > 0 ? d1 / (d1 - d3) : T(0);
-    return {p0 + t * e1, t, 0};
+  const T ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], de = e[0] * x0[0] + e[1] * x0[1] + e[2] * x0[2];
+  const T zero{}, one = zero + 1.0f;
+  T t = lane_select(ee > zero, de / ee, zero);
+  t = lane_select(t < zero, zero, lane_select(t > one, one, t));
+  T d = zero;
+  for (int a = 0; a < 3; ++a) {
+    const T diff = t * e[a] - x0[a];
+    d += diff * diff;
   }
-  const V x2 = x - p2;
-  const T d5 = glm::dot(e1, x2), d6 = glm::dot(e2, x2);
-  if (d6 >= 0 && d5 <= d6) return {p2, 0, 1};
-  const T vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const T t = d2 - d6 > 0 ? d2 / (d2 - d6) : T(0);
-    return {p0 + t * e2, 0, t};
-  }
-  const T va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const T denom = (d4 - d3) + (d5 - d6);
-    const T t = denom > 0 ? (d4 - d3) / denom : T(0);
-    return {p1 + t * (p2 - p1), 1 - t, t};
-  }
-  const T sum = va + vb + vc;
-  if (!(sum > 0)) return {p0, 0, 0};  // unreachable for a proper triangle; guards NaN
-  const T v = vb / sum, w = vc / sum;
-  return {p0 + v * e1 + w * e2, v, w};
+  return d;
 }
 
 struct NearestPrimitive {
@@ -91,13 +148,79 @@ GWNRT_HD GWNRT_FORCEINLINE float box_distance2(const WideNode& node, int lane, c
   return node.lo[0][lane] <= node.hi[0][lane] ? d2 : kInfinity;
 }
 
-// Near-first branch and bound over a wide BVH. `closest(i, x)` returns the ClosestPoint<float>
-// of leaf-order primitive i; ids maps leaf order to the input index.
-template <class ClosestFn>
-GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, ClosestFn closest) {
-  NearestPrimitive best;
-  if (bvh.node_count == 0) return best;
+// Whether the host's four-wide path is taken (tests also run the scalar one, the device's).
+inline constexpr bool kDistanceLanes = GWNRT_HOST_LANES != 0;
+
+// The same for a node's four lanes at once.
+template <bool Lanes = kDistanceLanes>
+GWNRT_HD GWNRT_FORCEINLINE void box_distances2(const WideNode& node, const vec3& x, float (&out)[kBvhWidth]) {
+#if GWNRT_HOST_LANES
+  if constexpr (Lanes) {
+    f4 d2{};
+    for (int a = 0; a < 3; ++a) {
+      const f4 lo = load4(node.lo[a]) - x[a], hi = splat<f4>(x[a]) - load4(node.hi[a]);
+      const f4 d = lane_select(lo > 0.0f, lo, lane_select(hi > 0.0f, hi, f4{}));
+      d2 += d * d;
+    }
+    d2 = lane_select(load4(node.lo[0]) <= load4(node.hi[0]), d2, splat<f4>(kInfinity));
+    __builtin_memcpy(out, &d2, sizeof out);
+    return;
+  }
+#endif
+  for (int l = 0; l < kBvhWidth; ++l) out[l] = box_distance2(node, l, x);
+}
+
+// The primitives of a leaf [first, first + count) nearer than best2: on the host four at a time
+// (lanes past the leaf repeat its last primitive and are not read back), else one by one, with
+// the same formula; ties go to the first in leaf order either way.
+template <bool Lanes, class Leaf>
+GWNRT_HD GWNRT_FORCEINLINE void nearest_in_leaf(const Leaf& leaf, uint32_t first, uint32_t count, const vec3& x,
+                                                float& best2, uint32_t& best) {
+  constexpr int K = Leaf::kCorners;
+  const float* c = &leaf.corners[0].x;
+#if GWNRT_HOST_LANES
+  if constexpr (Lanes) {
+    const f4 xs[3] = {splat<f4>(x.x), splat<f4>(x.y), splat<f4>(x.z)};
+    for (uint32_t base = first; base < first + count; base += 4) {
+      const uint32_t left = first + count - base, used = left < 4 ? left : 4;
+      const float* q[4];
+      for (uint32_t l = 0; l < 4; ++l) q[l] = c + 3 * K * (base + (l < used ? l : used - 1));
+      f4 p[K][3];
+      for (int k = 0; k < K; ++k)
+        for (int a = 0; a < 3; ++a) p[k][a] = f4{q[0][3 * k + a], q[1][3 * k + a], q[2][3 * k + a], q[3][3 * k + a]};
+      const f4 d2 = leaf.distance2(p, xs);
+      for (uint32_t l = 0; l < used; ++l)
+        if (d2[l] < best2) {
+          best2 = d2[l];
+          best = base + l;
+        }
+    }
+    return;
+  }
+#endif
+  const float xs[3] = {x.x, x.y, x.z};
+  for (uint32_t i = first; i < first + count; ++i) {
+    float p[K][3];
+    for (int k = 0; k < K; ++k)
+      for (int a = 0; a < 3; ++a) p[k][a] = c[3 * (K * i + k) + a];
+    const float d2 = leaf.distance2(p, xs);
+    if (d2 < best2) {
+      best2 = d2;
+      best = i;
+    }
+  }
+}
+
+// Near-first branch and bound over a wide BVH: a node's four boxes at once, a leaf's primitives
+// four at once (host), the nearest inner child popped next, and whatever is no nearer than the
+// best so far left unopened. The closest point of the nearest primitive (leaf order; ids maps to
+// the input index) is found last, once, by Leaf::closest.
+template <class Leaf, bool Lanes = kDistanceLanes>
+GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, const Leaf& leaf) {
+  NearestPrimitive out;
+  if (bvh.node_count == 0) return out;
   float best2 = kInfinity;
+  uint32_t best = kEmptyLane;
   NearFirstEntry stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = {0, 0.0f};
@@ -105,47 +228,62 @@ GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* 
     const NearFirstEntry entry = stack[--sp];
     if (entry.key >= best2) continue;
     const WideNode& node = bvh.nodes[entry.node];
+    float d2[kBvhWidth];
+    box_distances2<Lanes>(node, x, d2);
     NearFirstEntry inner[kBvhWidth];
     int inner_count = 0;
     for (int l = 0; l < kBvhWidth; ++l) {
-      const float d2 = box_distance2(node, l, x);
-      if (d2 >= best2) continue;
-      if (node.count[l] == 0) {
-        inner[inner_count++] = {node.child[l], d2};
-        continue;
-      }
-      for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
-        const ClosestPoint<float> c = closest(i, x);
-        const vec3 diff = c.point - x;
-        const float dist2 = glm::dot(diff, diff);
-        if (dist2 < best2) {
-          best2 = dist2;
-          best.primitive = ids[i];
-          best.u = c.u;
-          best.v = c.v;
-          best.point = c.point;
-        }
-      }
+      if (!(d2[l] < best2)) continue;
+      if (node.count[l] == 0)
+        inner[inner_count++] = {node.child[l], d2[l]};
+      else
+        nearest_in_leaf<Lanes>(leaf, node.child[l], node.count[l], x, best2, best);
     }
     push_near_first(stack, sp, inner, inner_count);
   }
-  best.distance = best2 < kInfinity ? sqrtf(best2) : kInfinity;
-  return best;
+  if (best == kEmptyLane) return out;
+  const ClosestPoint<float> c = leaf.closest(best, x);
+  out.distance = sqrtf(best2);
+  out.primitive = ids[best];
+  out.u = c.u;
+  out.v = c.v;
+  out.point = c.point;
+  return out;
 }
+
+struct TriangleLeaves {
+  static constexpr int kCorners = 3;
+  const vec3* corners;  // 3 per triangle, leaf order
+  template <class T>
+  GWNRT_HD GWNRT_FORCEINLINE T distance2(const T (&p)[3][3], const T (&x)[3]) const {
+    return triangle_distance2(p, x);
+  }
+  GWNRT_HD ClosestPoint<float> closest(uint32_t i, const vec3& x) const {
+    return closest_point_on_triangle(corners[3 * i], corners[3 * i + 1], corners[3 * i + 2], x);
+  }
+};
+
+struct SegmentLeaves {
+  static constexpr int kCorners = 2;
+  const vec3* corners;  // 2 per segment, leaf order
+  template <class T>
+  GWNRT_HD GWNRT_FORCEINLINE T distance2(const T (&p)[2][3], const T (&x)[3]) const {
+    return segment_distance2(p, x);
+  }
+  GWNRT_HD ClosestPoint<float> closest(uint32_t i, const vec3& x) const {
+    return closest_point_on_segment(corners[2 * i], corners[2 * i + 1], x);
+  }
+};
 
 }  // namespace detail
 
 GWNRT_HD inline NearestPrimitive unsigned_distance(const TriangleTreeView& tree, const vec3& x) {
-  return detail::nearest_primitive(tree.bvh, tree.triangle_ids, x, [&](uint32_t i, const vec3& q) {
-    return closest_point_on_triangle(tree.vertices[3 * i], tree.vertices[3 * i + 1], tree.vertices[3 * i + 2], q);
-  });
+  return detail::nearest_primitive(tree.bvh, tree.triangle_ids, x, detail::TriangleLeaves{tree.vertices});
 }
 
 // Distance to ∂M; +inf for a closed mesh (∂M empty).
 GWNRT_HD inline NearestPrimitive boundary_distance(const SegmentTreeView& tree, const vec3& x) {
-  return detail::nearest_primitive(tree.bvh, tree.segment_ids, x, [&](uint32_t i, const vec3& q) {
-    return closest_point_on_segment(tree.endpoints[2 * i], tree.endpoints[2 * i + 1], q);
-  });
+  return detail::nearest_primitive(tree.bvh, tree.segment_ids, x, detail::SegmentLeaves{tree.endpoints});
 }
 
 }  // namespace gwnrt

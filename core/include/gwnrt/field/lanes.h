@@ -26,6 +26,20 @@ namespace gwnrt {
 GWNRT_HD GWNRT_FORCEINLINE float lane_sqrt(float x) { return sqrtf(x); }
 GWNRT_HD GWNRT_FORCEINLINE double lane_abs(double x) { return fabs(x); }
 
+// Whether any lane of a comparison holds (a scalar comparison: whether it holds).
+GWNRT_HD GWNRT_FORCEINLINE bool lane_any(bool m) { return m; }
+
+// a·b − c·d to an ulp or two of the result, however much the products cancel (Kahan's: the
+// rounding error of c·d, recovered by a fused multiply-add, added back).
+GWNRT_HD GWNRT_FORCEINLINE float difference_of_products(float a, float b, float c, float d) {
+  const float cd = c * d;
+  return fmaf(a, b, -cd) + fmaf(-c, d, cd);
+}
+GWNRT_HD GWNRT_FORCEINLINE double difference_of_products(double a, double b, double c, double d) {
+  const double cd = c * d;
+  return fma(a, b, -cd) + fma(-c, d, cd);
+}
+
 // m ? a : b, lane by lane for lane vectors (GCC's vector conditional) and plainly for scalars.
 template <class M, class V>
 GWNRT_HD GWNRT_FORCEINLINE V lane_select(M m, V a, V b) {
@@ -102,6 +116,22 @@ GWNRT_FORCEINLINE uint32_t lane_bits(M m) {
   uint32_t bits = 0;
   for (int i = 0; i < int(sizeof(M) / sizeof(int32_t)); ++i) bits |= (m[i] != 0 ? 1u : 0u) << i;
   return bits;
+}
+
+GWNRT_FORCEINLINE f4 difference_of_products(f4 a, f4 b, f4 c, f4 d) {
+#if defined(__FMA__)
+  const __m128 cd = _mm_mul_ps(__m128(c), __m128(d));
+  return f4(_mm_add_ps(_mm_fmsub_ps(__m128(a), __m128(b), cd), _mm_fnmadd_ps(__m128(c), __m128(d), cd)));
+#else
+  f4 r;
+  for (int i = 0; i < 4; ++i) r[i] = difference_of_products(a[i], b[i], c[i], d[i]);
+  return r;
+#endif
+}
+
+template <class M>
+GWNRT_FORCEINLINE bool lane_any(M m) {
+  return lane_bits(m) != 0;
 }
 
 // Four doubles, where the CPU has 256-bit registers: exact products of floats (the ray's edge
