@@ -154,6 +154,23 @@ TEST_F(QueryCliTest, DefaultIsWOnlyAndOptionsChangeNothingButColumns) {
   std::remove(out_file.c_str());
 }
 
+// Issue 16 item 2: the sheets are classified only for the fields that read them (sdf,
+// sheet_dist): the distance and w alone do not pay for them, and answer the same.
+TEST_F(QueryCliTest, SheetsAreClassifiedOnlyForTheFieldsThatReadThem) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path()) + " -v --threads 1";
+  const RunResult alone = run_query(binary_, base + " --fields udist,w");
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  EXPECT_NE(alone.err.find("sheets not classified"), std::string::npos) << alone.err;
+  const RunResult with_sdf = run_query(binary_, base + " --fields udist,w,sheet_dist");
+  ASSERT_EQ(with_sdf.exit_code, 0) << with_sdf.err;
+  EXPECT_EQ(with_sdf.err.find("sheets not classified"), std::string::npos) << with_sdf.err;
+  const Csv a = parse_csv(alone.out), b = parse_csv(with_sdf.out);
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  ASSERT_FALSE(a.rows.empty());
+  for (size_t i = 0; i < a.rows.size(); ++i)
+    for (size_t k = 0; k < a.header.size(); ++k) EXPECT_EQ(a.rows[i].at(k), b.rows[i].at(k)) << "row " << i;
+}
+
 TEST_F(QueryCliTest, ClosedMeshPrintsInfiniteBoundaryDistance) {
   const std::string closed_mesh = test::data_path("bunny.obj");
   const RunResult r =

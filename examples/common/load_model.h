@@ -24,13 +24,14 @@ struct ModelLoad {
 };
 
 // Errors name the file (the loader's messages already do; a build failure gets it prefixed).
-inline Status load_model(const std::string& path, GwnModel& model, ModelLoad& info) {
+inline Status load_model(const std::string& path, GwnModel& model, ModelLoad& info, const BuildOptions& options = {}) {
   const auto t_load = std::chrono::steady_clock::now();
   Mesh mesh;
   if (Status s = load_mesh(path, mesh, &info.report); !s.ok()) return s;
   info.load_seconds = seconds_since(t_load);
   const auto t_build = std::chrono::steady_clock::now();
-  if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) return {s.code(), path + ": " + s.message()};
+  if (Status s = GwnModel::build(std::move(mesh), model, options); !s.ok())
+    return {s.code(), path + ": " + s.message()};
   info.build_seconds = seconds_since(t_build);
   return Status::Ok();
 }
