@@ -13,14 +13,30 @@ struct ClosestPoint {
   T u, v;  // point = (1 - u - v) p0 + u p1 + v p2   (segments: point = (1 - u) p0 + u p1, v = 0)
 };
 
+// The nearest point to x of the segment from p to p + e, given xs = x − p: its parameter t in
+// [0, 1] (a zero-length segment: 0) and the squared distance. Branch-free, for T = float, double
+// or a lane vector (the edges of triangle_nearest, the boundary's segments).
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE T segment_nearest(const T (&xs)[3], const T (&e)[3], T& t) {
+  const T zero{}, one = zero + 1.0f;
+  const T ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], de = e[0] * xs[0] + e[1] * xs[1] + e[2] * xs[2];
+  t = lane_select(ee > zero, de / ee, zero);
+  t = lane_select(t < zero, zero, lane_select(t > one, one, t));
+  T d = zero;
+  for (int a = 0; a < 3; ++a) {
+    const T diff = t * e[a] - xs[a];
+    d += diff * diff;
+  }
+  return d;
+}
+
 template <class T>
 GWNRT_HD inline ClosestPoint<T> closest_point_on_segment(const glm::vec<3, T>& a, const glm::vec<3, T>& b,
                                                          const glm::vec<3, T>& x) {
-  const glm::vec<3, T> ab = b - a;
-  const T len2 = glm::dot(ab, ab);
-  T t = len2 > 0 ? glm::dot(x - a, ab) / len2 : T(0);
-  t = t < 0 ? T(0) : (t > 1 ? T(1) : t);
-  return {a + t * ab, t, 0};
+  const T xs[3] = {x.x - a.x, x.y - a.y, x.z - a.z}, e[3] = {b.x - a.x, b.y - a.y, b.z - a.z};
+  T t;
+  (void)segment_nearest(xs, e, t);
+  return {a + t * (b - a), t, 0};
 }
 
 // The nearest point of a triangle to x, branch-free, for one triangle (T = float or double) or
@@ -44,18 +60,9 @@ GWNRT_HD GWNRT_FORCEINLINE T triangle_nearest(const T (&p)[3][3], const T (&x)[3
   }
   const T zero{}, one = zero + 1.0f;
   const auto dot = [](const T(&a)[3], const T(&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-  const auto clamp01 = [&](T t) { return lane_select(t < zero, zero, lane_select(t > one, one, t)); };
-  const auto ratio = [&](T num, T den) { return clamp01(lane_select(den > zero, num / den, zero)); };
   // Edges: t along each, and the squared distance to its point.
-  const T t1 = ratio(dot(x0, e1), dot(e1, e1)), t2 = ratio(dot(x0, e2), dot(e2, e2)),
-          t3 = ratio(dot(x1, e3), dot(e3, e3));
-  T d_ab = zero, d_ac = zero, d_bc = zero;
-  for (int a = 0; a < 3; ++a) {
-    const T ab = t1 * e1[a] - x0[a], ac = t2 * e2[a] - x0[a], bc = t3 * e3[a] - x1[a];
-    d_ab += ab * ab;
-    d_ac += ac * ac;
-    d_bc += bc * bc;
-  }
+  T t1, t2, t3;
+  const T d_ab = segment_nearest(x0, e1, t1), d_ac = segment_nearest(x0, e2, t2), d_bc = segment_nearest(x1, e3, t3);
   // The foot: u = n·(x0 × e2)/|n|², v = n·(e1 × x0)/|n|² (x's height over the plane drops out),
   // the distance to it x's height (x0·n)²/|n|². n by differences of products to an ulp or two of
   // itself: a sliver's plane from products that cancel to its width (a foot computed from u and v
@@ -111,21 +118,12 @@ GWNRT_HD inline ClosestPoint<T> closest_point_on_triangle(const glm::vec<3, T>& 
 // Squared distance from x to a segment p[0] p[1], branch-free like triangle_distance2.
 template <class T>
 GWNRT_HD GWNRT_FORCEINLINE T segment_distance2(const T (&p)[2][3], const T (&x)[3]) {
-  T x0[3], e[3];
+  T xs[3], e[3], t;
   for (int a = 0; a < 3; ++a) {
-    x0[a] = x[a] - p[0][a];
+    xs[a] = x[a] - p[0][a];
     e[a] = p[1][a] - p[0][a];
   }
-  const T ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], de = e[0] * x0[0] + e[1] * x0[1] + e[2] * x0[2];
-  const T zero{}, one = zero + 1.0f;
-  T t = lane_select(ee > zero, de / ee, zero);
-  t = lane_select(t < zero, zero, lane_select(t > one, one, t));
-  T d = zero;
-  for (int a = 0; a < 3; ++a) {
-    const T diff = t * e[a] - x0[a];
-    d += diff * diff;
-  }
-  return d;
+  return segment_nearest(xs, e, t);
 }
 
 struct NearestPrimitive {
