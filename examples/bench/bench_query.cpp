@@ -117,9 +117,11 @@ int main(int argc, char** argv) {
       baseline.emplace_back(row["mode"].get<std::string>(), row["queries_per_second"].get<double>());
     }
   }
-  auto baseline_rate = [&](const std::string& mode) -> double {
-    for (const auto& [name, rate] : baseline)
-      if (mode == name || (mode.rfind(name + ",", 0) == 0)) return rate;
+  // A row's throughput over its baseline mode's; NaN without one (the brute force's row is its
+  // own yardstick).
+  auto baseline_ratio = [&](const std::string& mode, double rate) -> double {
+    for (const auto& [name, base_rate] : baseline)
+      if (mode == name || (mode.rfind(name + ",", 0) == 0)) return rate / base_rate;
     return NAN;
   };
   const examples::ThreadLimit limit(threads);
@@ -229,11 +231,11 @@ int main(int argc, char** argv) {
     else if (!baseline.empty())
       std::printf(" %14s", "");
     if (!baseline.empty() && &r != &rows[0]) {
-      const double b = baseline_rate(r.mode);
-      if (std::isnan(b))
+      const double ratio = baseline_ratio(r.mode, r.rate());
+      if (std::isnan(ratio))
         std::printf(" %14s", "(not in it)");
       else
-        std::printf(" %14.3g", r.rate() / b);
+        std::printf(" %14.3g", ratio);
     }
     std::printf("\n");
   }
@@ -282,15 +284,14 @@ int main(int argc, char** argv) {
     out["taylor_per_query"] = {{"lanes_expanded", taylor_counts.far_lanes * per},
                                {"exact_triangles", taylor_counts.near_triangles * per}};
     nlohmann::json table = nlohmann::json::array();
+    auto number_or_null = [](double v) { return std::isnan(v) ? nlohmann::json() : nlohmann::json(v); };
     for (const Row& r : rows)
       table.push_back({{"mode", r.mode},
                        {"points", r.points},
                        {"queries_per_second", r.rate()},
                        {"ratio_to_brute_force", r.rate() / base},
-                       {"ratio_to_baseline", baseline.empty() || &r == &rows[0] || std::isnan(baseline_rate(r.mode))
-                                                 ? nlohmann::json()
-                                                 : nlohmann::json(r.rate() / baseline_rate(r.mode))},
-                       {"max_abs_error", std::isnan(r.max_error) ? nlohmann::json() : nlohmann::json(r.max_error)}});
+                       {"ratio_to_baseline", number_or_null(&r == &rows[0] ? NAN : baseline_ratio(r.mode, r.rate()))},
+                       {"max_abs_error", number_or_null(r.max_error)}});
     out["rows"] = table;
     std::ofstream file(json_path);
     file << out.dump(2) << "\n";

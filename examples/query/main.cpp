@@ -280,9 +280,6 @@ int main(int argc, char** argv) {
   build_options.sheet_level = level;
   if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded, build_options); !s.ok())
     return fail(kProgram, s.message());
-  if (build_options.classify_sheets && level != model.sheet_level()) {
-    if (gwnrt::Status s = model.set_sheet_level(level); !s.ok()) return fail(kProgram, s.message());
-  }
   const gwnrt::MeshLoadReport& report = loaded.report;
   gwnrt::examples::print_load_warnings(kProgram, mesh_path, report);
   const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
