@@ -169,6 +169,17 @@ TEST_F(QueryCliTest, SheetsAreClassifiedOnlyForTheFieldsThatReadThem) {
   ASSERT_FALSE(a.rows.empty());
   for (size_t i = 0; i < a.rows.size(); ++i)
     for (size_t k = 0; k < a.header.size(); ++k) EXPECT_EQ(a.rows[i].at(k), b.rows[i].at(k)) << "row " << i;
+  // The distance to M alone reads M's tree alone: neither the boundary nor its cone is built,
+  // and the distances are those of the full build.
+  const RunResult udist = run_query(binary_, base + " --fields udist");
+  ASSERT_EQ(udist.exit_code, 0) << udist.err;
+  EXPECT_NE(udist.err.find("boundary and cone not built"), std::string::npos) << udist.err;
+  EXPECT_EQ(alone.err.find("boundary and cone not built"), std::string::npos) << alone.err;
+  const Csv c = parse_csv(udist.out);
+  ASSERT_EQ(c.rows.size(), b.rows.size());
+  const size_t column = size_t(std::find(b.header.begin(), b.header.end(), "udist") - b.header.begin());
+  ASSERT_LT(column, b.header.size());
+  for (size_t i = 0; i < c.rows.size(); ++i) EXPECT_EQ(c.rows[i].back(), b.rows[i].at(column)) << "row " << i;
 }
 
 TEST_F(QueryCliTest, ClosedMeshPrintsInfiniteBoundaryDistance) {

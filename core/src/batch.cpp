@@ -106,6 +106,16 @@ Status validate_points(std::span<const vec3> points) {
   return Status::Ok();
 }
 
+namespace {
+constexpr const char* kBoundaryNotBuilt =
+    "the model's boundary and cone are not built, and this query reads them (GwnModel::prepare with kPartBoundary)";
+}  // namespace
+
+Status validate_trace_view(const ModelView& view) {
+  if (!(view.parts & kPartBoundary)) return {StatusCode::kInvalidArgument, kBoundaryNotBuilt};
+  return Status::Ok();
+}
+
 Status validate_request(const QueryRequest& request, const ModelView* view) {
   if (uint32_t(request.method) >= kWindingMethodCount)
     return {StatusCode::kInvalidArgument, "winding method must be auto, crossing, taylor or brute, got the value " +
@@ -121,6 +131,8 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
       !std::isfinite(n.tolerance) || !std::isfinite(n.max_step))
     return {StatusCode::kInvalidArgument,
             "Newton options: tolerance and max_step must be finite and > 0, mesh_fraction in (0, 1]"};
+  if (view && (parts_read_by(request) & kPartBoundary) && !(view->parts & kPartBoundary))
+    return {StatusCode::kInvalidArgument, kBoundaryNotBuilt};
   if (view && (request.fields & kSheetFields)) {
     if (std::isnan(view->sheet_level))
       return {StatusCode::kInvalidArgument,
@@ -136,11 +148,14 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
 
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress) {
-  const ModelView view = model_view(model);
+  ModelView view;
   return parallel_map(
       "evaluate_points", "points", "result slots", points, results, 256, progress,
       [&] {
         if (Status s = validate_points(points); !s.ok()) return s;
+        if (Status s = validate_request(request); !s.ok()) return s;
+        if (Status s = model.prepare(parts_read_by(request)); !s.ok()) return s;
+        view = model.view();
         return validate_request(request, &view);
       },
       [&](const vec3& x) { return evaluate_point(view, x, request); },
@@ -169,10 +184,16 @@ Status validate_trace_options(const TraceOptions& options) {
 
 Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options, std::span<RayHit> hits,
                   std::atomic<size_t>* progress) {
-  const ModelView view = model_view(model);
+  ModelView view;
   // Rays cost far more than points (and vary more), so chunks are smaller.
   return parallel_map(
-      "trace_rays", "rays", "hit slots", rays, hits, 64, progress, [&] { return validate_trace_options(options); },
+      "trace_rays", "rays", "hit slots", rays, hits, 64, progress,
+      [&] {
+        if (Status s = validate_trace_options(options); !s.ok()) return s;
+        if (Status s = model.prepare(kPartBoundary); !s.ok()) return s;
+        view = model.view();
+        return validate_trace_view(view);
+      },
       [&](const Ray& ray) { return trace_surface(view, ray, options); }, [] { return std::vector<uint64_t>(); });
 }
 

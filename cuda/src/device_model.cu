@@ -70,6 +70,8 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
   return guard_status("DeviceModel::upload", [&]() -> Status {
     std::string why;
     if (!device_available(&why)) return {StatusCode::kUnavailable, why};
+    // Every part the model may be asked: the device's copy is not built on first need.
+    if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
     auto b = std::make_unique<Buffers>();
     // Same views as on the host (counts, bounds), with device pointers in place of host ones.
     ModelView v = model.view();

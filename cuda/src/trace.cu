@@ -19,7 +19,11 @@ Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const Tra
                   std::span<RayHit> hits) {
   // Smaller blocks than for points: rays diverge in cost and hold a larger stack.
   return map_batch_on_device(
-      "trace_rays", model.view(), rays, hits, 64, [&] { return validate_trace_options(options); },
+      "trace_rays", model.view(), rays, hits, 64,
+      [&] {
+        if (Status s = validate_trace_options(options); !s.ok()) return s;
+        return validate_trace_view(model.view());
+      },
       TraceRay{model.view(), options});
 }
 

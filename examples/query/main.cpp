@@ -273,37 +273,51 @@ int main(int argc, char** argv) {
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
-  // The sheets only for the fields that read them, classified at once for --level: the distance
-  // and w alone do not pay for them (on the 871k dragon 0.4 s of a 1.3 s build).
+  // M's tree, then only the parts the fields read (parts_read_by): the distance to M alone does
+  // not pay for the boundary, the cone and the sheets (on the 871k dragon 0.6 s of a 1.3 s
+  // build); the sheets are classified for --level.
   gwnrt::BuildOptions build_options;
-  build_options.classify_sheets = (fields & gwnrt::kSheetFields) != 0;
+  build_options.defer_parts = true;
   build_options.sheet_level = level;
   if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded, build_options); !s.ok())
     return fail(kProgram, s.message());
+  const auto t_parts = std::chrono::steady_clock::now();
+  if (gwnrt::Status s = model.prepare(gwnrt::parts_read_by(request)); !s.ok())
+    return fail(kProgram, mesh_path + ": " + s.message());
   const gwnrt::MeshLoadReport& report = loaded.report;
   gwnrt::examples::print_load_warnings(kProgram, mesh_path, report);
-  const double load_seconds = loaded.load_seconds, build_seconds = loaded.build_seconds;
+  const double load_seconds = loaded.load_seconds;
+  const double build_seconds = loaded.build_seconds + gwnrt::examples::seconds_since(t_parts);
 
   if (chatty) {
+    const uint32_t built = model.built_parts();
     std::fprintf(stderr, "%s: %s (%s): %zu vertices, %zu triangles", kProgram, mesh_path.c_str(), report.format.c_str(),
                  report.vertex_count, report.triangle_count);
     if (report.polygons_fanned) std::fprintf(stderr, " (%zu polygons fanned)", report.polygons_fanned);
     if (report.uv_count) std::fprintf(stderr, ", %zu UVs", report.uv_count);
     if (report.has_colors) std::fprintf(stderr, ", vertex colours");
-    std::fprintf(stderr, ", %zu degenerate, %zu boundary segments%s; loaded in %.3f s\n", report.degenerate_triangles,
-                 model.boundary().segment_count(), model.boundary().segment_count() ? "" : " (closed)", load_seconds);
+    std::fprintf(stderr, ", %zu degenerate", report.degenerate_triangles);
+    if (built & gwnrt::kPartBoundary)
+      std::fprintf(stderr, ", %zu boundary segments%s", model.boundary().segment_count(),
+                   model.boundary().segment_count() ? "" : " (closed)");
+    std::fprintf(stderr, "; loaded in %.3f s\n", load_seconds);
     if (!report.attributes_dropped.empty())
       std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), report.attributes_dropped.c_str());
-    std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, boundary %.3f s, ", kProgram, build_seconds,
-                 model.timings().tree_seconds, model.timings().boundary_seconds);
-    if (build_options.classify_sheets)
+    std::fprintf(stderr, "%s: built in %.3f s (tree %.3f s, ", kProgram, build_seconds, model.timings().tree_seconds);
+    if (built & gwnrt::kPartBoundary)
+      std::fprintf(stderr, "boundary %.3f s, ", model.timings().boundary_seconds);
+    else
+      std::fprintf(stderr, "boundary and cone not built, ");
+    if (built & gwnrt::kPartSheets)
       std::fprintf(stderr, "sheets %.3f s: %u of %zu triangles)\n", model.timings().sheet_seconds,
                    model.sheet_tree().view().triangle_count, report.triangle_count);
     else
       std::fprintf(stderr, "sheets not classified: no field asked reads them)\n");
-    std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
-                 gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
-                 exact ? "brute" : method_name.c_str());
+    // Every field but the distances evaluates w (auto resolved with the cone, built for them).
+    if (request.fields & ~(gwnrt::kFieldUnsignedDistance | gwnrt::kFieldBoundaryDistance | gwnrt::kFieldSheetDistance))
+      std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
+                   gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
+                   exact ? "brute" : method_name.c_str());
   }
 
   std::vector<vec3> points;

@@ -14,7 +14,8 @@ namespace gwnrt {
 inline ModelView model_view(const GwnModel& model) { return model.view(); }
 
 // results.size() must equal points.size(). `progress`, when given, counts finished points
-// (for a progress bar on another thread). Fails on a size mismatch, a point validate_points
+// (for a progress bar on another thread). Builds the model parts the request reads that are not
+// yet (parts_read_by; GwnModel::prepare). Fails on a size mismatch, a point validate_points
 // refuses, a bad order or a beta <= 0.
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress = nullptr);
@@ -26,12 +27,16 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
 inline constexpr float kMaxQueryCoordinate = 1e18f;
 Status validate_points(std::span<const vec3> points);
 
-// Order, beta, level and Newton options; with `view`, also that sdf and sheet-distance requests
-// ask for the level the view's sheets were classified for.
+// Order, beta, level and Newton options; with `view`, also that it holds the parts the request
+// reads and that sdf and sheet-distance requests ask for the level its sheets were classified for.
 Status validate_request(const QueryRequest& request, const ModelView* view = nullptr);
 
-// hits.size() must equal rays.size(). Invalid rays (non-finite, zero direction) are not an
-// error of the batch: their hit has `invalid` set. Fails on a size mismatch or bad options.
+// That `view` holds ∂M and its cone, which the tracer reads (a view without them would be traced
+// as a closed mesh).
+Status validate_trace_view(const ModelView& view);
+
+// hits.size() must equal rays.size(). Builds the model's boundary and cone if not yet. Invalid rays (non-finite, zero
+// direction) are not an error of the batch: their hit has `invalid` set. Fails on a size mismatch or bad options.
 Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options, std::span<RayHit> hits,
                   std::atomic<size_t>* progress = nullptr);
 

@@ -1,7 +1,9 @@
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <string>
 
 #include "gwnrt/geometry/model.h"
@@ -22,6 +24,10 @@ constexpr float kSheetAmbiguity = 0.1f;
 // The most segments the spanning surface may end up fanning from one apex (a boundary of many
 // small scattered loops) for the sheets to be classified with it: past that it is C again.
 constexpr size_t kMaxSingleApexSegments = 256;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 // SmoothRegion per group of loops (see model_view.h). Groups: the loops themselves, or, beyond
 // kMaxSmoothRegions, runs of loops sorted along the axis where their centres spread most.
@@ -94,6 +100,17 @@ Status check_mesh_scale(const Mesh& mesh) {
   return Status::Ok();
 }
 
+struct GwnModel::Deferral {
+  BuildOptions options;
+  std::mutex mutex;
+  std::atomic<uint32_t> built{0};  // ModelPart bits; set (release) once a part's members are written
+};
+
+GwnModel::GwnModel() = default;
+GwnModel::~GwnModel() = default;
+GwnModel::GwnModel(GwnModel&&) noexcept = default;
+GwnModel& GwnModel::operator=(GwnModel&&) noexcept = default;
+
 Status GwnModel::build(Mesh mesh, GwnModel& out, const BuildOptions& options) {
   return guard_status("GwnModel::build", [&] { return build_unguarded(std::move(mesh), out, options); });
 }
@@ -106,29 +123,20 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
   if (uint32_t(options.sheet_method) >= kWindingMethodCount || options.sheet_method == WindingMethod::kBrute)
     return {StatusCode::kInvalidArgument,
             "BuildOptions: sheet_method must be auto, crossing or taylor (brute would sum n² terms)"};
+  if (options.classify_sheets && !std::isfinite(options.sheet_level))
+    return {StatusCode::kInvalidArgument, "BuildOptions: sheet level must be a finite number"};
   if (Status s = validate_mesh(mesh); !s.ok()) return s;
   if (Status s = check_mesh_scale(mesh); !s.ok()) return s;
-  using clock = std::chrono::steady_clock;
+  const auto t0 = std::chrono::steady_clock::now();
   GwnModel model;
+  model.deferral_ = std::make_unique<Deferral>();
+  model.deferral_->options = options;
   model.mesh_ = std::move(mesh);
-  auto t0 = clock::now();
   if (Status s = build_triangle_tree(model.mesh_, options.max_leaf_triangles, model.triangles_); !s.ok()) return s;
   // The tree leaves zero-area triangles out; with none left there is nothing to evaluate.
   if (model.triangles_.triangle_ids.empty())
     return {StatusCode::kInvalidMesh, "mesh: all " + std::to_string(model.mesh_.triangles.size()) +
                                           " triangles have zero area (nothing to evaluate)"};
-  auto t1 = clock::now();
-  model.boundary_ = extract_boundary(model.mesh_);
-  if (Status s = build_segment_tree(model.boundary_.endpoints, options.max_leaf_segments, model.boundary_tree_);
-      !s.ok())
-    return s;
-  uint32_t loop_count = 0;
-  const std::vector<uint32_t> loop_of_segment = boundary_loops(model.boundary_, loop_count);
-  const Mesh cone = boundary_cone(model.boundary_, loop_of_segment, loop_count);
-  if (Status s = build_triangle_tree(cone, options.max_leaf_triangles, model.cone_); !s.ok()) return s;
-  model.cone_lengths_ = gwnrt::cone_boundary_lengths(model.cone_);
-  model.cone_segments_ = gwnrt::cone_segments(model.cone_);
-  model.smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
   double area = 0;
   for (const uvec3& t : model.mesh_.triangles) {
     const dvec3 p0(model.mesh_.positions[t[0]]), p1(model.mesh_.positions[t[1]]), p2(model.mesh_.positions[t[2]]);
@@ -140,61 +148,102 @@ Status GwnModel::build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& o
   // |w(x)| <= A / (4π d²) at distance d from the box, so beyond sqrt(A / 2π) no level w* + k
   // with |w*| <= 1/2 is reached; 1% more absorbs round-off.
   model.surface_margin_ = float(1.01 * std::sqrt(area / (2 * kPi)));
-  auto t2 = clock::now();
-  model.max_leaf_triangles_ = options.max_leaf_triangles;
-  model.sheet_method_ = resolve_winding_method(model.view(), options.sheet_method);
-  // A large ∂M (auto's crossing threshold) whose clusters are long, an open fan of slivers around
-  // one vertex: the multipole opens every cluster at every centroid, and C, a fan over ∂M, the
-  // same. By crossings with the spanning surface instead (its triangles near the part of ∂M they
-  // span), exact: an open cone of 10^4 slivers 4.6 s -> 0.05 s, of 10^5 0.42 s (design.md §4).
-  if (options.sheet_method == WindingMethod::kAuto && model.sheet_method_ == WindingMethod::kTaylor &&
-      clusters_are_long(model.triangles_.view())) {
-    SpanningSurface spanning = spanning_surface(model.boundary_);
-    if (spanning.single_apex_segments <= kMaxSingleApexSegments) {
-      model.spanning_ = std::move(spanning.mesh);
-      model.sheet_method_ = WindingMethod::kCrossing;
-    }
+  model.timings_.tree_seconds = seconds_since(t0);
+  model.deferral_->built.store(kPartTriangles, std::memory_order_release);
+  if (!options.defer_parts) {
+    if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
   }
-  if (options.classify_sheets) {
-    if (Status s = model.set_sheet_level(options.sheet_level); !s.ok()) return s;
-  }
-  auto t3 = clock::now();
-  model.timings_.tree_seconds = std::chrono::duration<double>(t1 - t0).count();
-  model.timings_.boundary_seconds = std::chrono::duration<double>(t2 - t1).count();
-  model.timings_.sheet_seconds = std::chrono::duration<double>(t3 - t2).count();
   out = std::move(model);
   return Status::Ok();
 }
 
-Status GwnModel::set_sheet_level(float level) {
-  return guard_status("GwnModel::set_sheet_level", [&] { return set_sheet_level_unguarded(level); });
+uint32_t GwnModel::built_parts() const { return deferral_ ? deferral_->built.load(std::memory_order_acquire) : 0; }
+
+Status GwnModel::prepare(uint32_t parts) const {
+  if ((built_parts() & parts) == parts) return Status::Ok();
+  if (!deferral_) return {StatusCode::kInvalidArgument, "GwnModel: empty (GwnModel::build makes one)"};
+  return guard_status("GwnModel::prepare", [&] {
+    std::lock_guard<std::mutex> lock(deferral_->mutex);
+    const uint32_t built = deferral_->built.load(std::memory_order_relaxed);
+    if ((parts & (kPartBoundary | kPartSheets)) && !(built & kPartBoundary)) {
+      if (Status s = build_boundary(); !s.ok()) return s;
+    }
+    if ((parts & kPartSheets) && !(built & kPartSheets) && deferral_->options.classify_sheets)
+      return set_sheet_level_locked(deferral_->options.sheet_level);
+    return Status::Ok();
+  });
 }
 
-Status GwnModel::set_sheet_level_unguarded(float level) {
+Status GwnModel::build_boundary() const {
+  const auto t0 = std::chrono::steady_clock::now();
+  const BuildOptions& options = deferral_->options;
+  boundary_ = extract_boundary(mesh_);
+  if (Status s = build_segment_tree(boundary_.endpoints, options.max_leaf_segments, boundary_tree_); !s.ok()) return s;
+  uint32_t loop_count = 0;
+  const std::vector<uint32_t> loop_of_segment = boundary_loops(boundary_, loop_count);
+  const Mesh cone = boundary_cone(boundary_, loop_of_segment, loop_count);
+  if (Status s = build_triangle_tree(cone, options.max_leaf_triangles, cone_); !s.ok()) return s;
+  cone_lengths_ = gwnrt::cone_boundary_lengths(cone_);
+  cone_segments_ = gwnrt::cone_segments(cone_);
+  smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
+  timings_.boundary_seconds = seconds_since(t0);
+  deferral_->built.fetch_or(kPartBoundary, std::memory_order_release);
+  return Status::Ok();
+}
+
+Status GwnModel::set_sheet_level(float level) {
+  return guard_status("GwnModel::set_sheet_level", [&] {
+    if (!deferral_) return Status{StatusCode::kInvalidArgument, "GwnModel: empty (GwnModel::build makes one)"};
+    std::lock_guard<std::mutex> lock(deferral_->mutex);
+    if (!(deferral_->built.load(std::memory_order_relaxed) & kPartBoundary)) {
+      if (Status s = build_boundary(); !s.ok()) return s;
+    }
+    return set_sheet_level_locked(level);
+  });
+}
+
+Status GwnModel::set_sheet_level_locked(float level) const {
   if (!std::isfinite(level)) return {StatusCode::kInvalidArgument, "sheet level must be a finite number"};
-  if (sheet_method_ == WindingMethod::kCrossing) {
-    if (other_winding_.empty()) {  // exact, once for every level
-      other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
-      sheet_jump_.assign(mesh_.triangles.size(), 0);
-      if (spanning_.triangles.empty()) {
-        other_triangles_winding_by_crossings(view(), view().cone, other_winding_, sheet_jump_);
-      } else {
-        TriangleTree spanning;
-        if (Status s = build_triangle_tree(spanning_, max_leaf_triangles_, spanning); !s.ok()) return s;
-        other_triangles_winding_by_crossings(view(), spanning.view(), other_winding_, sheet_jump_);
-        spanning_ = {};  // once for every level
+  const auto t0 = std::chrono::steady_clock::now();
+  const BuildOptions& options = deferral_->options;
+  if (other_winding_.empty()) {  // the first classification: how, and the values every level reads
+    sheet_method_ = resolve_winding_method(view(), options.sheet_method);
+    // A large ∂M (auto's crossing threshold) whose clusters are long, an open fan of slivers
+    // around one vertex: the multipole opens every cluster at every centroid, and C, a fan over
+    // ∂M, the same. By crossings with the spanning surface instead (its triangles near the part
+    // of ∂M they span), exact: an open cone of 10^4 slivers 4.6 s -> 0.05 s, of 10^5 0.42 s
+    // (design.md §4).
+    Mesh spanning_mesh;
+    if (options.sheet_method == WindingMethod::kAuto && sheet_method_ == WindingMethod::kTaylor &&
+        clusters_are_long(triangles_.view())) {
+      SpanningSurface spanning = spanning_surface(boundary_);
+      if (spanning.single_apex_segments <= kMaxSingleApexSegments) {
+        spanning_mesh = std::move(spanning.mesh);
+        sheet_method_ = WindingMethod::kCrossing;
       }
     }
-  } else {
-    if (other_winding_.empty()) {  // the first classification: the coarse pass over all triangles
+    // Into locals first: a classification that fails half-way leaves none behind.
+    std::vector<float> winding(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
+    std::vector<int8_t> jump(mesh_.triangles.size(), 0);
+    if (sheet_method_ == WindingMethod::kCrossing) {  // exact, once for every level
+      if (spanning_mesh.triangles.empty()) {
+        other_triangles_winding_by_crossings(view(), view().cone, winding, jump);
+      } else {
+        TriangleTree spanning;
+        if (Status s = build_triangle_tree(spanning_mesh, options.max_leaf_triangles, spanning); !s.ok()) return s;
+        other_triangles_winding_by_crossings(view(), spanning.view(), winding, jump);
+      }
+    } else {  // the coarse pass over all triangles; the fine one below where a level needs it
       const size_t n = triangles_.triangle_ids.size();
       std::vector<uint32_t> leaves(n);
       for (uint32_t i = 0; i < n; ++i) leaves[i] = i;
-      other_winding_.assign(mesh_.triangles.size(), std::numeric_limits<float>::quiet_NaN());
-      sheet_jump_.assign(mesh_.triangles.size(), 0);
+      other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, winding, jump);
       other_winding_refined_.assign(mesh_.triangles.size(), 0);
-      other_triangles_winding(triangles_, leaves, kSheetBetaCoarse, other_winding_, sheet_jump_);
     }
+    other_winding_ = std::move(winding);
+    sheet_jump_ = std::move(jump);
+  }
+  if (sheet_method_ != WindingMethod::kCrossing) {
     std::vector<uint32_t> ambiguous;  // leaf order: a side within kSheetAmbiguity of the level
     for (uint32_t i = 0; i < triangles_.triangle_ids.size(); ++i) {
       const uint32_t t = triangles_.triangle_ids[i];
@@ -225,26 +274,37 @@ Status GwnModel::set_sheet_level_unguarded(float level) {
     sheets.reserve(sheet_count);
     for (uint32_t t = 0; t < other_winding_.size(); ++t)
       if (is_sheet_flag[t]) sheets.push_back(t);
-    if (Status s = build_triangle_tree(mesh_, sheets, max_leaf_triangles_, sheets_, TreeMoments::kWithout); !s.ok())
+    if (Status s =
+            build_triangle_tree(mesh_, sheets, deferral_->options.max_leaf_triangles, sheets_, TreeMoments::kWithout);
+        !s.ok())
       return s;
   }
   sheet_level_ = level;
+  deferral_->options.classify_sheets = true;  // classified now: kept for every later prepare
+  timings_.sheet_seconds = seconds_since(t0);
+  deferral_->built.fetch_or(kPartSheets, std::memory_order_release);
   return Status::Ok();
 }
 
 ModelView GwnModel::view() const {
+  const uint32_t built = built_parts();
   ModelView v;
+  v.parts = built;
   v.triangles = triangle_view();
-  v.boundary = boundary_tree_.view();
-  v.cone = cone_.view();
-  v.cone_boundary_lengths = cone_lengths_.data();
-  v.cone_segments = cone_segments_.data();
-  v.sheets = sheets_.view();
-  v.sheet_level = sheet_level_;
-  v.smooth_regions = smooth_regions_.data();
-  v.smooth_region_count = uint32_t(smooth_regions_.size());
   v.bounds = bounds_;
   v.surface_margin = surface_margin_;
+  if (built & kPartBoundary) {
+    v.boundary = boundary_tree_.view();
+    v.cone = cone_.view();
+    v.cone_boundary_lengths = cone_lengths_.data();
+    v.cone_segments = cone_segments_.data();
+    v.smooth_regions = smooth_regions_.data();
+    v.smooth_region_count = uint32_t(smooth_regions_.size());
+  }
+  if (built & kPartSheets) {
+    v.sheets = sheets_.view();
+    v.sheet_level = sheet_level_;
+  }
   return v;
 }
 

@@ -69,6 +69,7 @@ Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, S
   out = SurfaceMesh{};
   if (Status s = validate_options(options); !s.ok()) return s;
   if (Status s = check_attributes(model.mesh(), options.attributes); !s.ok()) return s;
+  if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
   const ModelView view = model.view();
   if (!level_within_reach(view, options.level)) {
     stats.message = "level " + std::to_string(options.level) +

@@ -357,6 +357,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   QueryRequest request;
   request.fields = kFieldSignedDistance;
   request.level = options.level;
+  if (Status s = model.prepare(parts_read_by(request)); !s.ok()) return s;
   const ModelView view = model.view();
   if (Status s = validate_request(request, &view); !s.ok()) return s;
   TraceOptions trace;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -44,18 +45,36 @@ struct BuildOptions {
   // tree build's time), taylor (the multipole tree, two passes, about ten tree builds; decided
   // within kSheetSideTolerance), or auto (resolve_winding_method). brute is refused (n² terms).
   WindingMethod sheet_method = WindingMethod::kAuto;
+  // Build M's tree now and the other parts (the boundary and cone; the sheets, when
+  // classify_sheets) on first need: GwnModel::prepare, which the batch drivers call with what a
+  // request reads. A query of distances to M alone then never pays for them (871k dragon, 2
+  // cores: the tree 0.6 s, the boundary and cone 0.22 s, the sheets 0.4 s). Off by default, so
+  // that build() reports every failure and a model's view() is whole; gwnrt-query defers.
+  bool defer_parts = false;
 };
 
 struct BuildTimings {
-  double tree_seconds = 0;      // triangle BVH + moments
-  double boundary_seconds = 0;  // ∂M extraction + its tree
-  double sheet_seconds = 0;     // w of the other triangles at every centroid + the sheet tree
+  double tree_seconds = 0;      // triangle BVH + moments, M's box and margin
+  double boundary_seconds = 0;  // ∂M extraction + its tree + the cone (0 until built)
+  double sheet_seconds = 0;     // w of the other triangles at every centroid + the sheet tree (0 until built)
 };
 
 class GwnModel {
  public:
+  GwnModel();
+  ~GwnModel();
+  GwnModel(GwnModel&&) noexcept;
+  GwnModel& operator=(GwnModel&&) noexcept;
+
   // Validates the mesh (finite coordinates, indices in range, not empty) and builds.
   static Status build(Mesh mesh, GwnModel& out, const BuildOptions& options = {});
+
+  // Builds the ModelPart bits of `parts` not built yet (the sheets with the boundary they read;
+  // not the sheets of a model built without classify_sheets, which validate_request then
+  // refuses). Thread-safe and once: concurrent callers wait for one build, and a built part costs
+  // an atomic load. The accessors below of the boundary, cone and sheets read what is built.
+  Status prepare(uint32_t parts) const;
+  uint32_t built_parts() const;
 
   const Mesh& mesh() const { return mesh_; }
   const TriangleTree& triangle_tree() const { return triangles_; }
@@ -85,35 +104,42 @@ class GwnModel {
   const TriangleTree& sheet_tree() const { return sheets_; }  // for distances: no moments
   float sheet_level() const { return sheet_level_; }
   // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
-  // is too coarse to decide) and rebuilds the sheet tree. Not thread-safe with queries running
-  // on this model. Fails on a non-finite level.
+  // is too coarse to decide) and rebuilds the sheet tree; the first time, builds the boundary
+  // if it is not. Not thread-safe with queries running on this model. Fails on a non-finite level.
   Status set_sheet_level(float level);
+  // The built parts (view().parts says which; the others are empty).
   ModelView view() const;
+  // Not to be read while another thread builds a part.
   const BuildTimings& timings() const { return timings_; }
 
  private:
+  struct Deferral;  // what prepare needs: the options, the built bits, a mutex
+
   static Status build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& options);
-  Status set_sheet_level_unguarded(float level);
+  // Under deferral_->mutex: the boundary part, then the sheets' first classification.
+  Status build_boundary() const;
+  Status set_sheet_level_locked(float level) const;
 
   Mesh mesh_;
   TriangleTree triangles_;
-  BoundaryCurve boundary_;
-  SegmentTree boundary_tree_;
-  TriangleTree cone_;
-  std::vector<WideNodeLength> cone_lengths_;
-  std::vector<ConeSegment> cone_segments_;
-  std::vector<SmoothRegion> smooth_regions_;
   Aabb bounds_;
   float surface_margin_ = 0;
-  std::vector<float> other_winding_;
-  std::vector<int8_t> sheet_jump_;
-  Mesh spanning_;  // spanning_surface's, until the sheets are classified by crossings with it
-  std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
-  TriangleTree sheets_;
-  float sheet_level_ = __builtin_nanf("");
-  WindingMethod sheet_method_ = WindingMethod::kAuto;  // resolved at build
-  uint32_t max_leaf_triangles_ = 4;
-  BuildTimings timings_;
+  std::unique_ptr<Deferral> deferral_;
+  // The parts built on first need (by const prepare, as a cache is): written only under
+  // deferral_->mutex, read only once their bit is set.
+  mutable BoundaryCurve boundary_;
+  mutable SegmentTree boundary_tree_;
+  mutable TriangleTree cone_;
+  mutable std::vector<WideNodeLength> cone_lengths_;
+  mutable std::vector<ConeSegment> cone_segments_;
+  mutable std::vector<SmoothRegion> smooth_regions_;
+  mutable std::vector<float> other_winding_;
+  mutable std::vector<int8_t> sheet_jump_;
+  mutable std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
+  mutable TriangleTree sheets_;
+  mutable float sheet_level_ = __builtin_nanf("");
+  mutable WindingMethod sheet_method_ = WindingMethod::kAuto;  // resolved at the first classification
+  mutable BuildTimings timings_;
 };
 
 }  // namespace gwnrt

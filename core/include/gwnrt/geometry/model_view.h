@@ -27,6 +27,15 @@ struct ConeSegment {
 
 inline constexpr uint32_t kMaxSmoothRegions = 16;  // loops are grouped beyond this
 
+// The parts of a GwnModel, built by GwnModel::build at once or, with BuildOptions::defer_parts,
+// on first need (GwnModel::prepare). A ModelView says which it holds: the others are empty views,
+// which the queries would read as a closed mesh without sheets, so the drivers check.
+enum ModelPart : uint32_t {
+  kPartTriangles = 1u << 0,  // M's multipole tree, its box and margin: always built
+  kPartBoundary = 1u << 1,   // ∂M and its tree, the cone C over ∂M and its tree, the smooth regions
+  kPartSheets = 1u << 2,     // the sheet classification and the sheet tree (reads the boundary's)
+};
+
 struct ModelView {
   TriangleTreeView triangles;  // M
   SegmentTreeView boundary;    // ∂M
@@ -46,6 +55,7 @@ struct ModelView {
   uint32_t smooth_region_count = 0;
   Aabb bounds;               // of M
   float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (docs/design.md §5)
+  uint32_t parts = 0;        // ModelPart bits: what the view holds
 };
 
 // Whether w can reach `level` anywhere: w sums one solid angle in (-2π, 2π) over 4π per triangle,

@@ -35,6 +35,19 @@ struct QueryRequest {
   NewtonOptions newton;
 };
 
+// The model parts (ModelPart) evaluate_point reads for `request`: ∂M and its cone for every field
+// but the distance to M and w by the tree or the brute force (auto chooses by the cone's size,
+// the crossings read it, and so do ρ, the projection and the sdf), the sheets for kSheetFields.
+inline uint32_t parts_read_by(const QueryRequest& request) {
+  constexpr uint32_t kWindingFields = kFieldW | kFieldGradient | kFieldHessian | kFieldPseudoDistance;
+  const bool winding_reads_cone = request.method != WindingMethod::kTaylor && request.method != WindingMethod::kBrute;
+  const uint32_t without_cone = kFieldUnsignedDistance | (winding_reads_cone ? 0u : kWindingFields);
+  uint32_t parts = kPartTriangles;
+  if (request.fields & ~without_cone) parts |= kPartBoundary;
+  if (request.fields & kSheetFields) parts |= kPartSheets;
+  return parts;
+}
+
 struct PointResult {
   float w = 0;
   vec3 gradient{0.0f};
