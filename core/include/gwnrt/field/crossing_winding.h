@@ -84,7 +84,7 @@ struct ConeCrossingSum {
   CrossingStats* stats;
   FieldAccumulator<float> far_field;
   UnwrappedAngleSum near_half_angles;  // Σ atan2 of the near triangles
-  dvec3 near_gradient{0.0};
+  FanGradientSum near_gradient;        // with the Hessian, its sum alone (the edges evaluated anyway)
   Sym3<double> near_hessian;
   int jumps = 0;         // Σ jumps of C ahead
   bool on_cone = false;  // x lies exactly on a near cone triangle (its plane, inside or on its edges)
@@ -110,7 +110,7 @@ struct ConeCrossingSum {
   // A near cone triangle, summed exactly.
   GWNRT_HD void near(uint32_t, const vec3& apex, const vec3& a, const vec3& b) {
     const dvec3 xd(x);
-    corners.next(xd, apex, a, b);
+    const bool continues = corners.next(xd, apex, a, b);
     const SolidAngleTangent<double> tangent =
         solid_angle_tangent(corners.g0, corners.g1, corners.g2, corners.l0, corners.l1, corners.l2,
                             glm::cross(corners.g1, corners.g2), glm::dot(corners.g1, corners.g2));
@@ -139,10 +139,10 @@ struct ConeCrossingSum {
       dvec3 g;
       Sym3<double> h;
       triangle_solid_angle_derivatives(dvec3(apex), dvec3(a), dvec3(b), xd, g, h);
-      near_gradient += g;
+      near_gradient.sum += g;
       near_hessian += h;
     } else if constexpr (WantGradient) {
-      near_gradient += triangle_solid_angle_gradient(dvec3(apex), dvec3(a), dvec3(b), xd);
+      near_gradient.add(corners, continues);
     }
     if (stats) ++stats->cone_near;
   }
@@ -325,7 +325,7 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
     WindingSample out;
     out.w = detail::crossing_winding(cone, mesh_jumps);
     if constexpr (WantGradient)
-      out.gradient = cone.far_field.gradient * kInv4Pi + vec3(cone.near_gradient * (0.25 * kInvPi));
+      out.gradient = cone.far_field.gradient * kInv4Pi + vec3(cone.near_gradient.total() * (0.25 * kInvPi));
     if constexpr (WantHessian) {
       const Sym3<double> h = cone.near_hessian * (0.25 * kInvPi);
       const Sym3<float> near{float(h.xx), float(h.xy), float(h.xz), float(h.yy), float(h.yz), float(h.zz)};

@@ -170,7 +170,9 @@ struct FanCorners {
   double l0 = 0.0, l1 = 0.0, l2 = 0.0;
   vec3 last_apex{__builtin_huge_valf()}, last_b{__builtin_huge_valf()};
 
-  GWNRT_HD void next(const dvec3& x, const vec3& apex, const vec3& a, const vec3& b) {
+  // Whether this triangle continues the last one's fan: the same apex, and its a the last b.
+  GWNRT_HD bool next(const dvec3& x, const vec3& apex, const vec3& a, const vec3& b) {
+    const bool continues = apex == last_apex && a == last_b;
     if (!(apex == last_apex)) {
       last_apex = apex;
       g0 = dvec3(apex) - x;
@@ -181,6 +183,7 @@ struct FanCorners {
     l1 = a == last_b ? l2 : glm::length(g1);
     l2 = glm::length(g2);
     last_b = b;
+    return continues;
   }
 };
 
@@ -198,11 +201,14 @@ struct EdgeField {
   T inv_li, inv_lj;
   bool degenerate;
 
-  GWNRT_HD EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj) {
+  GWNRT_HD EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj)
+      : EdgeField(gi, gj, glm::length(gi), glm::length(gj)) {}
+  // Inlined everywhere: out of line in some translation units only (the tests'), its products
+  // were fused into FMAs differently there, and the same query gave results an ulp apart.
+  GWNRT_HD GWNRT_FORCEINLINE EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj, T li, T lj) {
     e = gj - gi;
     c = glm::cross(gi, gj);
     c2 = glm::dot(c, c);
-    const T li = glm::length(gi), lj = glm::length(gj);
     degenerate = !(c2 > T(0)) || !(li > T(0)) || !(lj > T(0));
     inv_li = degenerate ? T(0) : T(1) / li;
     inv_lj = degenerate ? T(0) : T(1) / lj;
@@ -224,6 +230,23 @@ GWNRT_HD inline glm::vec<3, T> triangle_solid_angle_gradient(const glm::vec<3, T
   return detail::EdgeField<T>(g0, g1).gradient() + detail::EdgeField<T>(g1, g2).gradient() +
          detail::EdgeField<T>(g2, g0).gradient();
 }
+
+// ∇Ω summed over the triangles (apex, a, b) of fans visited in FanCorners' order. Where a
+// triangle continues the last one's fan, the last one's edge b → apex and this one's apex → a are
+// the same edge both ways, whose terms cancel: neither is evaluated, one edge in three for a run
+// of the cone's triangles instead of three. They are also the large terms near the cone's inner
+// edges (singular lines of both), so leaving them out removes their rounding as well.
+struct FanGradientSum {
+  dvec3 sum{0.0};
+  dvec3 open_edge{0.0};  // the last triangle's b → apex, until the next one shows whether it cancels
+
+  GWNRT_HD GWNRT_FORCEINLINE void add(const FanCorners& c, bool continues) {  // inlined: see EdgeField
+    sum += detail::EdgeField<double>(c.g1, c.g2, c.l1, c.l2).gradient();      // a → b, a segment of ∂M
+    if (!continues) sum += open_edge + detail::EdgeField<double>(c.g0, c.g1, c.l0, c.l1).gradient();
+    open_edge = detail::EdgeField<double>(c.g2, c.g0, c.l2, c.l0).gradient();
+  }
+  GWNRT_HD dvec3 total() const { return sum + open_edge; }
+};
 
 // ∇Ω and the Hessian of Ω together. The Hessian is the x-derivative of each edge term,
 // ∂(c f/|c|²)/∂x = c ⊗ v + (f/|c|²) E with v = ∇f/|c|² − 2f/|c|⁴ (c × e) and E the matrix of

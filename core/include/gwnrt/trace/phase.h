@@ -51,7 +51,7 @@ struct PhaseSum {
   const vec3& x;
   FieldAccumulator<float> far_field;
   HalfAngleSum near_half_angles;
-  dvec3 near_gradient{0.0};
+  FanGradientSum near_gradient;
   float nearest2 = kInfinity;
   float integral = 0.0f;  // Σ ∫ |dl| / |l - x|², bounded
 
@@ -70,7 +70,7 @@ struct PhaseSum {
   FanCorners corners;  // reuses the apex's and the shared vertex's lengths
 
   GWNRT_HD void near(uint32_t t, const vec3& apex, const vec3& a, const vec3& b) {
-    corners.next(dvec3(x), apex, a, b);
+    const bool continues = corners.next(dvec3(x), apex, a, b);
     const dvec3 &g0 = corners.g0, &g1 = corners.g1, &g2 = corners.g2;
     const double l0 = corners.l0, l1 = corners.l1, l2 = corners.l2;
     const dvec3 c12 = glm::cross(g1, g2);
@@ -90,16 +90,14 @@ struct PhaseSum {
     nearest2 = dist2 < nearest2 ? dist2 : nearest2;
     // In double: the cone's long inner edges carry large Biot–Savart terms that cancel between
     // neighbours, and in float that cancellation bends normals above a flat cap by 1e-2.
-    if constexpr (WantGradient)
-      near_gradient += triangle_solid_angle_gradient(dvec3(apex), dvec3(a), dvec3(b), dvec3(x));
+    if constexpr (WantGradient) near_gradient.add(corners, continues);
   }
 };
 
 template <bool WantGradient>
 GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta, bool exact) {
   // The exact reference reads every triangle as near: the bound from each segment alone.
-  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, dvec3(0.0), kInfinity, 0.0f,
-                             {}};
+  PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}};
   visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
   PhaseSample out;
   float w;
@@ -110,7 +108,7 @@ GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta,
   } else {
     // Ω/4π, the near part as Σ atan2 / 2π taken modulo 1 all at once.
     w = sum.far_field.omega * kInv4Pi + sum.near_half_angles.angle() * float(0.5 / kPi);
-    out.gradient = (sum.far_field.gradient + vec3(sum.near_gradient)) * kInv4Pi;
+    out.gradient = (sum.far_field.gradient + vec3(sum.near_gradient.total())) * kInv4Pi;
   }
   out.phi = w - floorf(w);
   if (!(out.phi < 1.0f)) out.phi = 0.0f;  // w just below a whole number rounds up to it
