@@ -4,6 +4,7 @@
 
 #include <cuda_runtime.h>
 
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -12,9 +13,11 @@
 
 namespace gwnrt::cuda {
 
-inline Status cuda_status(cudaError_t err, const char* what) {
+inline Status cuda_status(cudaError_t err, const std::string& what) {
   if (err == cudaSuccess) return Status::Ok();
-  return {StatusCode::kUnavailable, std::string(what) + ": " + cudaGetErrorString(err)};
+  cudaGetLastError();  // clears a sticky error, so that the next call does not report it again
+  return {err == cudaErrorMemoryAllocation ? StatusCode::kOutOfMemory : StatusCode::kUnavailable,
+          what + ": " + cudaGetErrorString(err)};
 }
 
 template <class T>
@@ -42,7 +45,12 @@ class DeviceBuffer {
   Status allocate(size_t count) {
     release();
     if (count == 0) return Status::Ok();
-    if (Status s = cuda_status(cudaMalloc(&ptr_, count * sizeof(T)), "cudaMalloc"); !s.ok()) {
+    if (count > SIZE_MAX / sizeof(T))
+      return {StatusCode::kOutOfMemory, "cudaMalloc of " + std::to_string(count) + " items of " +
+                                            std::to_string(sizeof(T)) + " bytes: beyond the address space"};
+    if (Status s = cuda_status(cudaMalloc(&ptr_, count * sizeof(T)),
+                               "cudaMalloc of " + std::to_string(count * sizeof(T)) + " bytes");
+        !s.ok()) {
       ptr_ = nullptr;
       return s;
     }

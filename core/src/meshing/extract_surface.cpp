@@ -66,39 +66,54 @@ Status make_grid(const ModelView& view, const MeshingOptions& o, MeshGrid& grid)
 }
 
 Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out, MeshingStats& stats) {
-  out = SurfaceMesh{};
-  if (Status s = validate_options(options); !s.ok()) return s;
-  if (Status s = check_attributes(model.mesh(), options.attributes); !s.ok()) return s;
-  if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
-  const ModelView view = model.view();
-  if (!level_within_reach(view, options.level)) {
-    stats.message = "level " + std::to_string(options.level) +
-                    " lies outside every value w takes on this mesh (|w| < " +
-                    std::to_string(view.triangles.triangle_count) + "/2): S is empty (an empty mesh)";
-    return Status::Ok();
-  }
-  MeshGrid grid;
-  if (Status s = make_grid(view, options, grid); !s.ok()) return s;
-  for (int a = 0; a < 3; ++a) {
-    stats.grid[a] = uint32_t(grid.cells[a]);
-    stats.origin[a] = grid.origin[a];
-  }
-  stats.cell_size = grid.cell;
-  // The sheets bound the distance to S only when classified for this level and exactly (the
-  // multipole's classification decides within a tolerance); otherwise the distance to M does.
-  ScoutQuery scout{view, options.level, options.winding.taylor.beta,
-                   view.sheet_level == options.level && model.sheet_side_tolerance() == 0.0f};
+  MeshingPlan plan;
+  if (Status s = plan_meshing(model, options, plan, out, stats); !s.ok() || plan.empty) return s;
   HostBackend backend;
-  if (Status s = run_dual_contouring(backend, view, options, grid, scout, out, stats); !s.ok()) {
+  const ScoutQuery scout{plan.view, options.level, options.winding.taylor.beta, plan.use_sheets};
+  if (Status s = run_dual_contouring(backend, plan.view, options, plan.grid, scout, out, stats); !s.ok()) {
     out = SurfaceMesh{};
     return s;
   }
-  if (Status s = transfer_attributes(model.mesh(), view.triangles, options.attributes, out); !s.ok()) {
+  return finish_meshing(model, options, out);
+}
+
+}  // namespace
+
+Status plan_meshing(const GwnModel& model, const MeshingOptions& options, MeshingPlan& plan, SurfaceMesh& out,
+                    MeshingStats& stats) {
+  out = SurfaceMesh{};
+  plan = MeshingPlan{};
+  if (Status s = validate_options(options); !s.ok()) return s;
+  if (Status s = check_attributes(model.mesh(), options.attributes); !s.ok()) return s;
+  if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
+  plan.view = model.view();
+  if (!level_within_reach(plan.view, options.level)) {
+    stats.message = "level " + std::to_string(options.level) +
+                    " lies outside every value w takes on this mesh (|w| < " +
+                    std::to_string(plan.view.triangles.triangle_count) + "/2): S is empty (an empty mesh)";
+    plan.empty = true;
+    return Status::Ok();
+  }
+  if (Status s = make_grid(plan.view, options, plan.grid); !s.ok()) return s;
+  for (int a = 0; a < 3; ++a) {
+    stats.grid[a] = uint32_t(plan.grid.cells[a]);
+    stats.origin[a] = plan.grid.origin[a];
+  }
+  stats.cell_size = plan.grid.cell;
+  // The sheets bound the distance to S only when classified for this level and exactly (the
+  // multipole's classification decides within a tolerance); otherwise the distance to M does.
+  plan.use_sheets = plan.view.sheet_level == options.level && model.sheet_side_tolerance() == 0.0f;
+  return Status::Ok();
+}
+
+Status finish_meshing(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out) {
+  if (Status s = transfer_attributes(model.mesh(), model.triangle_view(), options.attributes, out); !s.ok()) {
     out = SurfaceMesh{};
     return s;
   }
   if (options.soup) {
     // Three vertices of its own per triangle, each a copy of the indexed corner's.
+    const HostBackend backend;
     const uint64_t t = out.triangles.size();
     for_each_vertex_array(out, [&](auto& a) {
       if (a.empty()) return;
@@ -113,8 +128,6 @@ Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, S
   }
   return Status::Ok();
 }
-
-}  // namespace
 
 Status extract_surface(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out, MeshingStats* stats) {
   MeshingStats local;

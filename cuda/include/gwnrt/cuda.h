@@ -9,6 +9,7 @@
 
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/meshing/extract_surface.h"
 
 namespace gwnrt::cuda {
 
@@ -38,5 +39,11 @@ Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const Tra
 // GPU counterpart of gwnrt::evaluate_points; results in input order.
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results);
+
+// GPU counterpart of gwnrt::extract_surface: the same driver and passes on the CUDA backend
+// (scans and compaction with CUB). `model` is the host model `device` was uploaded from (the
+// grid, the attributes and the soup are made on the host from it).
+Status extract_surface(const DeviceModel& device, const GwnModel& model, const MeshingOptions& options,
+                       SurfaceMesh& out, MeshingStats* stats = nullptr);
 
 }  // namespace gwnrt::cuda

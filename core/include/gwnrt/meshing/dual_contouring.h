@@ -314,6 +314,35 @@ struct HermitePass {
   }
 };
 
+// How the edges' crossings were found, counted for MeshingStats: on the device the driver reads
+// back four counters, not every edge.
+enum HermiteTallyIndex : uint32_t { kTallySheet, kTallySmooth, kTallyFallback, kTallyCapped, kHermiteTallies };
+
+// Item: a run of kHermiteTallyRun edges, counted locally and added once (four atomics a run, not
+// two an edge, which contend on one cache line).
+inline constexpr uint64_t kHermiteTallyRun = 256;
+
+struct HermiteTally {
+  const HermitePoint* hermite;
+  uint64_t edge_count;
+  unsigned long long* tally;  // kHermiteTallies counters, zeroed
+
+  GWNRT_HD void operator()(uint64_t run) const {
+    unsigned long long local[kHermiteTallies] = {0, 0, 0, 0};
+    const uint64_t run_end = (run + 1) * kHermiteTallyRun;
+    const uint64_t end = run_end < edge_count ? run_end : edge_count;
+    for (uint64_t i = run * kHermiteTallyRun; i < end; ++i) {
+      const HermitePoint& h = hermite[i];
+      ++local[h.kind == HermiteKind::kSheet    ? kTallySheet
+              : h.kind == HermiteKind::kSmooth ? kTallySmooth
+                                               : kTallyFallback];
+      local[kTallyCapped] += h.capped;
+    }
+    for (uint32_t k = 0; k < kHermiteTallies; ++k)
+      if (local[k]) atomic_add(tally + k, local[k]);
+  }
+};
+
 // The index of the edge along `axis` from corner c (one with a sign change), or kEmptyLane.
 GWNRT_HD inline uint32_t edge_index(const SparseGridView& view, const GridCoord& c, int axis) {
   const uint64_t item = view.item_of(c, 1);

@@ -1,8 +1,11 @@
 // The mesher's driver, written once over a backend (the TBB one: core/src/meshing/
-// host_backend.h; CUDA/CUB: cuda/): it sizes the arrays, runs the passes of
+// host_backend.h; CUDA/CUB: cuda/src/mesh_backend.cuh): it sizes the arrays, runs the passes of
 // meshing/dual_contouring.h over their items and compacts with exclusive scans. A backend
-// provides Array<T> (resize, data, size), parallel_for(n, fn), exclusive_scan(in, n, out) ->
-// total, and to_host(array, i) for the few values the driver reads back.
+// provides Array<T> (resize, which need not keep the contents but zero-fills, data, size, move),
+// parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total, to_host(array, i)
+// for the few values the driver reads back, and move_out(array, std::vector&) for the output.
+// Every function the driver hands to parallel_for is GWNRT_HD; it never touches host memory
+// from inside one (the output is moved out whole).
 #pragma once
 
 #include <algorithm>
@@ -10,6 +13,7 @@
 #include <cmath>
 #include <string>
 
+#include "gwnrt/geometry/model.h"
 #include "gwnrt/meshing/dual_contouring.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/trace/march_regions.h"
@@ -39,6 +43,33 @@ class PassClock {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
+// The bytes the driver's arrays hold at once, against MeshingOptions::memory_budget: reserve
+// fails, naming the grid and what it was for, when the total would exceed it. (A class, not a
+// lambda: nvcc refuses a function's local type in the template arguments of a function that
+// holds extended lambdas, run_marching_cubes.)
+class MemoryBudget {
+ public:
+  MemoryBudget(const MeshGrid& grid, uint64_t budget, MeshingStats& stats)
+      : grid_(grid), budget_(budget), stats_(stats) {}
+  Status reserve(uint64_t bytes, const char* what) {
+    live_ += bytes;
+    stats_.bytes = std::max(stats_.bytes, live_);
+    if (live_ > budget_)
+      return {StatusCode::kOutOfMemory, std::string("meshing at ") + std::to_string(grid_.cells[0]) + "x" +
+                                            std::to_string(grid_.cells[1]) + "x" + std::to_string(grid_.cells[2]) +
+                                            " cells needs at least " + byte_size_text(live_) + " (" + what +
+                                            "), beyond the memory budget of " + byte_size_text(budget_)};
+    return Status::Ok();
+  }
+  void release(uint64_t bytes) { live_ -= bytes; }
+
+ private:
+  const MeshGrid& grid_;
+  uint64_t budget_;
+  MeshingStats& stats_;
+  uint64_t live_ = 0;
+};
+
 // out = the items i of in[0, n) for which keep(i) holds, in order: the backend interface's
 // compaction (flags, an exclusive scan, a scatter), written once over parallel_for and
 // exclusive_scan. Returns how many were kept.
@@ -51,6 +82,7 @@ uint64_t compact(Backend& backend, const T* in, uint64_t n, Keep keep, Out& out)
   backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) { f[i] = keep(i) ? 1u : 0u; });
   const uint64_t total = backend.exclusive_scan(f, n, offset.data());
   out.resize(total);
+  if (total == 0) return 0;
   const uint32_t* o = offset.data();
   T* dst = out.data();
   backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) {
@@ -61,11 +93,27 @@ uint64_t compact(Backend& backend, const T* in, uint64_t n, Keep keep, Out& out)
 
 }  // namespace detail
 
+// What extract_surface does around the driver, shared with the CUDA backend's entry point
+// (gwnrt/cuda.h): plan_meshing checks the options and attributes, builds the model's parts and
+// sizes the grid; `empty` (with Ok) when S is empty for the level (stats.message says why, out
+// stays empty). finish_meshing transfers the attributes and makes the soup, on the host. Both in
+// core/src/meshing/extract_surface.cpp.
+struct MeshingPlan {
+  ModelView view;  // the host's
+  MeshGrid grid;
+  bool use_sheets = false;  // the scout's distance to S: to the sheets (exact classification) or to M
+  bool empty = false;
+};
+Status plan_meshing(const GwnModel& model, const MeshingOptions& options, MeshingPlan& plan, SurfaceMesh& out,
+                    MeshingStats& stats);
+Status finish_meshing(const GwnModel& model, const MeshingOptions& options, SurfaceMesh& out);
+
 // Marching cubes after the shared passes (corners, edges, Hermite data): the edges' points are
 // the vertices, each cell's loops its polygons.
-template <class Backend, class Array, class Reserve>
+template <class Backend, class Array>
 Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t edge_total, const Array& hermite,
-                          Reserve& reserve, detail::PassClock& clock, SurfaceMesh& out, MeshingStats& stats) {
+                          detail::MemoryBudget& budget, detail::PassClock& clock, SurfaceMesh& out,
+                          MeshingStats& stats) {
   using U32 = typename Backend::template Array<uint32_t>;
   const uint64_t items = stats.evaluated_blocks * kBlockItems;
   U32 count, offset;
@@ -73,25 +121,30 @@ Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t
   offset.resize(items);
   backend.parallel_for(items, MarchingCountPass{view, count.data()});
   const uint64_t face_total = backend.exclusive_scan(count.data(), items, offset.data());
-  if (Status s = reserve(face_total * 2 * sizeof(uvec3), "the triangles"); !s.ok()) return s;
+  if (Status s = budget.reserve(face_total * 2 * sizeof(uvec3), "the triangles"); !s.ok()) return s;
   typename Backend::template Array<uvec3> triangles;
   triangles.resize(face_total);
   backend.parallel_for(items, MarchingFacePass{view, count.data(), offset.data(), triangles.data()});
   stats.seconds.faces = clock.lap();
-  out.positions.resize(edge_total);
-  out.normals.resize(edge_total);
   {
+    typename Backend::template Array<vec3> positions, normals;
+    positions.resize(edge_total);
+    normals.resize(edge_total);
     const HermitePoint* h = hermite.data();
-    vec3 *p = out.positions.data(), *n = out.normals.data();
-    backend.parallel_for(edge_total, [=](uint64_t i) {
+    vec3 *p = positions.data(), *n = normals.data();
+    backend.parallel_for(edge_total, [=] GWNRT_HD(uint64_t i) {
       p[i] = h[i].point;
       n[i] = h[i].normal;
     });
+    backend.move_out(positions, out.positions);
+    backend.move_out(normals, out.normals);
   }
   // Faces with an edge not listed (a cell missing: a failed bound) are dropped, as in DC.
   const uvec3* t = triangles.data();
+  typename Backend::template Array<uvec3> kept_triangles;
   const uint64_t kept = detail::compact(
-      backend, t, face_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, out.triangles);
+      backend, t, face_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
+  backend.move_out(kept_triangles, out.triangles);
   stats.open_edges = face_total - kept;
   stats.seconds.output = clock.lap();
   return Status::Ok();
@@ -104,17 +157,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
                            const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
   using U32 = typename Backend::template Array<uint32_t>;
   detail::PassClock clock;
-  uint64_t bytes_live = 0;
-  const auto reserve = [&](uint64_t bytes, const char* what) -> Status {
-    bytes_live += bytes;
-    stats.bytes = std::max(stats.bytes, bytes_live);
-    if (bytes_live > options.memory_budget)
-      return {StatusCode::kOutOfMemory, std::string("meshing at ") + std::to_string(grid.cells[0]) + "x" +
-                                            std::to_string(grid.cells[1]) + "x" + std::to_string(grid.cells[2]) +
-                                            " cells needs at least " + byte_size_text(bytes_live) + " (" + what +
-                                            "), beyond the memory budget of " + byte_size_text(options.memory_budget)};
-    return Status::Ok();
-  };
+  detail::MemoryBudget budget(grid, options.memory_budget, stats);
 
   // 1. Scouting, coarse to fine: a block of 2^L·kBlockCells cells is split only when S may meet it.
   const int32_t corners_max = std::max({grid.cells[0], grid.cells[1], grid.cells[2]}) + 1;
@@ -144,8 +187,8 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
           return scout.may_meet(lo, hi);
         },
         kept);
-    if (Status s = reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
-    bytes_live -= count * sizeof(GridCoord) * (level > 0 ? 9 : 1);
+    if (Status s = budget.reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
+    budget.release(count * sizeof(GridCoord) * (level > 0 ? 9 : 1));
     if (level == 0) break;
     candidates.resize(count * 8);
     const GridCoord* src = kept.data();
@@ -165,7 +208,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
 
   // 2. Slots: the active blocks and the neighbours (+x, +y, +z) whose corners their cells read.
   const uint64_t block_count = grid.block_count();
-  if (Status s = reserve(block_count * 8, "the block map"); !s.ok()) return s;
+  if (Status s = budget.reserve(block_count * 8, "the block map"); !s.ok()) return s;
   U32 needed_dense, slot_of_block;
   needed_dense.resize(block_count);
   slot_of_block.resize(block_count);
@@ -190,7 +233,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, slot_of_block.data());
   // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
   const uint64_t per_slot = uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8;
-  if (Status s = reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
+  if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   U32 block_of_slot, needed_from;
   block_of_slot.resize(slots);
   needed_from.resize(slots);
@@ -234,7 +277,8 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   const uint64_t edge_total = backend.exclusive_scan(edge_count.data(), edge_count.size(), edge_offset.data());
   if (edge_total >= kEmptyLane / 2)
     return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(edge_total) + " crossing edges, beyond 2^31"};
-  if (Status s = reserve(edge_total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
+  if (Status s =
+          budget.reserve(edge_total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
       !s.ok())
     return s;
   view.edge_mask = edge_mask.data();
@@ -250,12 +294,15 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
                        HermitePass{view, model, options.winding, options.level, edges.data(), hermite.data()}, 16,
                        options.progress);
   stats.crossing_edges = edge_total;
-  for (uint64_t i = 0; i < edge_total; ++i) {
-    const HermitePoint& h = backend.to_host(hermite, i);
-    stats.sheet_edges += h.kind == HermiteKind::kSheet;
-    stats.smooth_edges += h.kind == HermiteKind::kSmooth;
-    stats.fallback_edges += h.kind == HermiteKind::kFallback;
-    stats.capped_edges += h.capped;
+  {
+    typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
+    tally.resize(kHermiteTallies);
+    backend.parallel_for((edge_total + kHermiteTallyRun - 1) / kHermiteTallyRun,
+                         HermiteTally{hermite.data(), edge_total, tally.data()}, 16);
+    stats.sheet_edges = backend.to_host(tally, kTallySheet);
+    stats.smooth_edges = backend.to_host(tally, kTallySmooth);
+    stats.fallback_edges = backend.to_host(tally, kTallyFallback);
+    stats.capped_edges = backend.to_host(tally, kTallyCapped);
   }
   stats.seconds.edges = clock.lap();
   if (edge_total == 0) {
@@ -264,7 +311,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   }
 
   if (options.method == MeshingMethod::kMarchingCubes)
-    return run_marching_cubes(backend, view, edge_total, hermite, reserve, clock, out, stats);
+    return run_marching_cubes(backend, view, edge_total, hermite, budget, clock, out, stats);
 
   // 5. Cells: one vertex per component.
   U32 cell_parts, cell_count, cell_offset;
@@ -278,7 +325,8 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   stats.multi_component_cells = backend.to_host(multi, 0);
   view.cell_parts = cell_parts.data();
   const uint64_t vertex_total = backend.exclusive_scan(cell_count.data(), cell_count.size(), cell_offset.data());
-  if (Status s = reserve(vertex_total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
+  if (Status s = budget.reserve(vertex_total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok())
+    return s;
   view.cell_vertex_count = cell_count.data();
   view.cell_vertex_offset = cell_offset.data();
   typename Backend::template Array<vec3> positions, normals;
@@ -307,13 +355,13 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   stats.seconds.smoothing = clock.lap();
 
   // 8. Output (indexed).
-  out.positions.resize(vertex_total);
-  out.normals.resize(vertex_total);
-  backend.copy_out(positions, out.positions.data());
-  backend.copy_out(normals, out.normals.data());
+  backend.move_out(positions, out.positions);
+  backend.move_out(normals, out.normals);
   const uvec3* t = triangles.data();
+  typename Backend::template Array<uvec3> kept_triangles;
   const uint64_t face_total = detail::compact(
-      backend, t, 2 * edge_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, out.triangles);
+      backend, t, 2 * edge_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
+  backend.move_out(kept_triangles, out.triangles);
   stats.open_edges = (2 * edge_total - face_total) / 2;
   stats.seconds.output = clock.lap();
   return Status::Ok();
