@@ -641,6 +641,7 @@ TEST_F(FuzzCli, Mesh) {
                {"--smooth-angle"},
                {"--attributes", {"", ",", "uv,uv", "source,uv,color", "colour", std::string(1000, ',')}},
                {"--threads"},
+               {"--device", {"", "cuda", "auto,cpu"}},
                // The report takes seconds (its distances to S), and only then is it written.
                {"--report-json", {out("no/such/dir/x.json")}}};
   for (const std::string& m : hostile_meshes(11))

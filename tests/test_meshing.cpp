@@ -779,6 +779,33 @@ TEST_F(MeshCliTest, WritesTheLibrarysMesh) {
   for (size_t i = 0; i < lib.positions.size(); ++i) ASSERT_EQ(read.positions[i], lib.positions[i]);
 }
 
+// Issue 17: --device. cuda meshes on the GPU or, without one (or without the CUDA backend built
+// in), fails saying why; auto says which it took and writes the CPU's mesh when it took the CPU.
+TEST_F(MeshCliTest, DeviceCudaOrAutoSaysWhereItRan) {
+  const std::string out = test::temp_path("device_mesh.ply");
+  const std::string base = test::quote(test::data_path("bunny.obj")) + " -o " + test::quote(out) + " --resolution 24";
+  const test::RunResult cuda = test::run_program(binary_, base + " --device cuda");
+  ASSERT_TRUE(cuda.exited);
+  if (cuda.exit_code != 0) {
+    EXPECT_EQ(cuda.exit_code, 1);
+    EXPECT_NE(cuda.err.find("--device cuda: "), std::string::npos) << cuda.err;
+  }
+  const test::RunResult automatic = test::run_program(binary_, base + " --device auto");
+  ASSERT_TRUE(automatic.exited && automatic.exit_code == 0) << automatic.err;
+  const bool took_cpu = automatic.err.find("--device auto: the CPU (") != std::string::npos;
+  EXPECT_TRUE(took_cpu || automatic.err.find("--device auto: the GPU") != std::string::npos) << automatic.err;
+  EXPECT_EQ(took_cpu, cuda.exit_code != 0) << "auto must take the GPU exactly when cuda works";
+  Mesh read;
+  ASSERT_TRUE(load_mesh(out, read).ok());
+  const GwnModel model = test::build_model(test::load_test_mesh("bunny.obj"));
+  SurfaceMesh lib;
+  ASSERT_TRUE(extract_surface(model, options_at(24), lib).ok());
+  ASSERT_EQ(read.triangles.size(), lib.triangles.size());
+  if (took_cpu) {
+    for (size_t i = 0; i < lib.positions.size(); ++i) ASSERT_EQ(read.positions[i], lib.positions[i]);
+  }
+}
+
 // UVs and colours from an OBJ (a cube, per-corner vt of six charts, v x y z r g b) to the PLY
 // written: the library's transfer, and a clear refusal for a mesh without them.
 TEST_F(MeshCliTest, CarriesTheInputsUvsAndColours) {

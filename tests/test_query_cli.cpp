@@ -433,6 +433,23 @@ TEST_F(QueryCliTest, CudaDeviceNeverCrashes) {
   }
 }
 
+// --device auto takes the GPU when --device cuda would work, else the CPU, saying which; on the
+// CPU its output is the default's.
+TEST_F(QueryCliTest, DeviceAutoSaysWhichItTook) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields w,udist";
+  const RunResult cpu = run_query(binary_, base);
+  const RunResult cuda = run_query(binary_, base + " --device cuda");
+  const RunResult automatic = run_query(binary_, base + " --device auto");
+  ASSERT_EQ(cpu.exit_code, 0) << cpu.err;
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.err;
+  const bool took_cpu = automatic.err.find("--device auto: the CPU (") != std::string::npos;
+  EXPECT_TRUE(took_cpu || automatic.err.find("--device auto: the GPU") != std::string::npos) << automatic.err;
+  EXPECT_EQ(took_cpu, cuda.exit_code != 0) << cuda.err;
+  if (took_cpu) {
+    EXPECT_EQ(automatic.out, cpu.out);
+  }
+}
+
 // Issue 15, item 3: a points file that never ends a line (/dev/zero, as a file or on standard
 // input) stopped the program only when memory ran out; now reading stops at the line limit, named.
 TEST_F(QueryCliTest, PointStreamsThatNeverEndStopAtTheLineLimit) {

@@ -59,6 +59,15 @@ bool device_available(std::string* why) {
   return true;
 }
 
+uint64_t free_device_memory() {
+  size_t free = 0, total = 0;
+  if (cudaMemGetInfo(&free, &total) != cudaSuccess) {
+    cudaGetLastError();
+    return 0;
+  }
+  return free;
+}
+
 DeviceModel::DeviceModel() = default;
 DeviceModel::~DeviceModel() = default;
 DeviceModel::DeviceModel(DeviceModel&&) noexcept = default;

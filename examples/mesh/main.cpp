@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_checks.h"
+#include "device_choice.h"
 #include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_writer.h"
 #include "gwnrt/meshing/attribute_transfer.h"
@@ -130,7 +131,7 @@ int main(int argc, char** argv) {
       "a closed, oriented, manifold mesh whatever the input (holes capped, soups repaired), written as binary "
       "PLY or OBJ.",
       kProgram};
-  std::string mesh_path, output_path, method = "dc", attributes;
+  std::string mesh_path, output_path, method = "dc", attributes, device = "cpu";
   gwnrt::MeshingOptions options;
   std::optional<uint32_t> resolution;
   std::optional<float> cell_size;
@@ -153,6 +154,9 @@ int main(int argc, char** argv) {
   app.add_flag("--soup", options.soup, "Write a triangle soup (three vertices of its own per triangle)");
   app.add_option("--attributes", attributes, "Per-vertex attributes to carry from the input: source,uv,color");
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
+  app.add_option("--device", device, gwnrt::examples::kDeviceHelp)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   app.add_flag("--report", report,
                "Print a quality report: topology, self-intersections, distances to S, time per pass, memory");
   app.add_option("--report-json", report_json_path, "Write the quality report as JSON to this file");
@@ -166,9 +170,16 @@ int main(int argc, char** argv) {
   if (resolution && *resolution == 0) return fail(kProgram, "--resolution must be at least 1");
   options.method = method == "mc" ? gwnrt::MeshingMethod::kMarchingCubes : gwnrt::MeshingMethod::kDualContouring;
   if (Status s = parse_attributes(attributes, options.attributes); !s.ok()) return fail(kProgram, s.message());
+  bool use_cuda = false;
+  if (Status s = gwnrt::examples::choose_device(kProgram, device, use_cuda); !s.ok())
+    return fail(kProgram, s.message());
   // The mesher refuses a grid beyond its budget, saying what it would need; a budget beyond the
-  // memory available would let the kernel kill the process instead (issue 15).
-  const uint64_t available = gwnrt::available_memory_bytes();
+  // memory available would let the kernel kill the process instead (issue 15), or on the GPU
+  // fail an allocation half-way.
+  uint64_t available = gwnrt::available_memory_bytes();
+#if defined(GWNRT_HAVE_CUDA)
+  if (use_cuda) available = gwnrt::cuda::free_device_memory();
+#endif
   const bool budget_is_available_memory = available < options.memory_budget;
   if (budget_is_available_memory) options.memory_budget = available;
   const gwnrt::examples::ThreadLimit thread_limit(threads);
@@ -192,9 +203,19 @@ int main(int argc, char** argv) {
   std::atomic<size_t> done{0}, total{0};
   options.progress = &done;
   options.progress_total = &total;
-  const auto t0 = std::chrono::steady_clock::now();
   Status s;
-  {
+  double upload_seconds = 0;
+  auto t0 = std::chrono::steady_clock::now();
+  if (use_cuda) {
+#if defined(GWNRT_HAVE_CUDA)
+    // Timed apart: the mesher's time is after the upload (the sheets are classified before it).
+    gwnrt::cuda::DeviceModel device_model;
+    s = gwnrt::cuda::DeviceModel::upload(model, device_model);
+    upload_seconds = seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    if (s.ok()) s = gwnrt::cuda::extract_surface(device_model, model, options, out, &stats);
+#endif
+  } else {
     gwnrt::examples::ProgressBar bar(done, total, "items");
     s = gwnrt::extract_surface(model, options, out, &stats);
   }
@@ -207,11 +228,12 @@ int main(int argc, char** argv) {
   if (Status w = gwnrt::write_surface_mesh(output_path, out); !w.ok()) return fail(kProgram, w.message());
   if (chatty)
     std::fprintf(stderr,
-                 "%s: %.3f s (+ %.3f s to write): %ux%ux%u cells of %g, %llu active blocks, %zu vertices, %zu "
-                 "triangles\n",
-                 kProgram, mesh_seconds, seconds_since(t_write), stats.grid[0], stats.grid[1], stats.grid[2],
-                 double(stats.cell_size), (unsigned long long)stats.active_blocks, out.positions.size(),
-                 out.triangles.size());
+                 "%s: %.3f s on the %s (+ %s%.3f s to write): %ux%ux%u cells of %g, %llu active "
+                 "blocks, %zu vertices, %zu triangles\n",
+                 kProgram, mesh_seconds, use_cuda ? "GPU" : "CPU",
+                 use_cuda ? (std::to_string(upload_seconds) + " s to upload, ").c_str() : "", seconds_since(t_write),
+                 stats.grid[0], stats.grid[1], stats.grid[2], double(stats.cell_size),
+                 (unsigned long long)stats.active_blocks, out.positions.size(), out.triangles.size());
   if (verbose) {
     const gwnrt::MeshingPassTimes& t = stats.seconds;
     std::fprintf(stderr,

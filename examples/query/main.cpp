@@ -19,6 +19,7 @@
 
 #include "cli_checks.h"
 #include "csv_writer.h"
+#include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
@@ -221,7 +222,9 @@ int main(int argc, char** argv) {
   app.add_option("--newton-tolerance", newton_tolerance, "Newton projection (proj): converged when |w - w*| <= this")
       ->capture_default_str()
       ->check(gwnrt::examples::positive_number());
-  app.add_option("--device", device, "Where to evaluate")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+  app.add_option("--device", device, gwnrt::examples::kDeviceHelp)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose,
@@ -255,19 +258,9 @@ int main(int argc, char** argv) {
   request.newton.tolerance = newton_tolerance;
 
   // Checked before the mesh is loaded so a large load is not wasted on a request that cannot run.
-  const bool use_cuda = device == "cuda";
-#if defined(GWNRT_HAVE_CUDA)
-  if (use_cuda) {
-    std::string why;
-    if (!gwnrt::cuda::device_available(&why)) return fail(kProgram, "--device cuda: no usable CUDA device: " + why);
-  }
-#else
-  if (use_cuda) {
-    return fail(kProgram,
-                "--device cuda: this gwnrt-query was built without the CUDA backend "
-                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
-  }
-#endif
+  bool use_cuda = false;
+  if (gwnrt::Status s = gwnrt::examples::choose_device(kProgram, device, use_cuda); !s.ok())
+    return fail(kProgram, s.message());
 
   const gwnrt::examples::ThreadLimit thread_limit(threads);
 

@@ -16,6 +16,7 @@
 
 #include "cli_checks.h"
 #include "csv_writer.h"
+#include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
@@ -133,7 +134,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-crossings", options.max_crossings, "Triangle crossings allowed per ray")->capture_default_str();
   app.add_option("--beta", options.beta, "Accuracy of the multipole evaluation of w mod 1")->capture_default_str();
   app.add_flag("--exact", options.exact, "Evaluate w mod 1 by the brute-force double sum (slow reference)");
-  app.add_option("--device", device, "Where to trace")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
+  app.add_option("--device", device, gwnrt::examples::kDeviceHelp)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
@@ -143,18 +146,9 @@ int main(int argc, char** argv) {
   if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(kProgram, s.message());
   const bool chatty = verbose || ::isatty(2) == 1;
 
-  const bool use_cuda = device == "cuda";
-#if defined(GWNRT_HAVE_CUDA)
-  if (use_cuda) {
-    std::string why;
-    if (!gwnrt::cuda::device_available(&why)) return fail(kProgram, "--device cuda: " + why);
-  }
-#else
-  if (use_cuda)
-    return fail(kProgram,
-                "--device cuda: this gwnrt-trace was built without the CUDA backend "
-                "(reconfigure with -DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)");
-#endif
+  bool use_cuda = false;
+  if (Status s = gwnrt::examples::choose_device(kProgram, device, use_cuda); !s.ok())
+    return fail(kProgram, s.message());
 
   const gwnrt::examples::ThreadLimit thread_limit(threads);
 

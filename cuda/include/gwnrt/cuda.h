@@ -3,6 +3,7 @@
 // (no CUDA headers), so host programs include it freely.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
@@ -15,6 +16,9 @@ namespace gwnrt::cuda {
 
 // True when a CUDA device can be used; otherwise `why` says what is missing.
 bool device_available(std::string* why = nullptr);
+
+// The device memory free now, in bytes (0 without a usable device): a budget for the mesher.
+uint64_t free_device_memory();
 
 // The model's arrays in device memory. Move-only; frees them on destruction.
 class DeviceModel {
