@@ -1,50 +1,8 @@
 // Uploading a GwnModel's arrays to the device (the owner DeviceModel, the views it hands out),
 // and whether a device can be used at all.
-#include "device_buffer.h"
-#include "gwnrt/cuda.h"
+#include "device_model.cuh"
 
 namespace gwnrt::cuda {
-namespace {
-
-// One multipole triangle tree in device memory (M itself, the cone C over ∂M, the sheets).
-struct DeviceTriangleTree {
-  DeviceBuffer<WideNode> nodes;
-  DeviceBuffer<WideNodeExpansion> expansion;
-  DeviceBuffer<WideNodeOrder1> order1;
-  DeviceBuffer<WideNodeOrder2> order2;
-  DeviceBuffer<vec3> vertices;
-  DeviceBuffer<uint32_t> triangle_ids;
-
-  // Uploads `tree` and points `view` (the host view of it) at the device copies.
-  Status upload(const TriangleTree& tree, TriangleTreeView& view) {
-    for (Status s :
-         {nodes.upload(tree.bvh.nodes), expansion.upload(tree.expansion), order1.upload(tree.order1),
-          order2.upload(tree.order2), vertices.upload(tree.vertices), triangle_ids.upload(tree.triangle_ids)})
-      if (!s.ok()) return s;
-    view.bvh.nodes = nodes.get();
-    view.expansion = expansion.get();
-    view.order1 = order1.get();
-    view.order2 = order2.get();
-    view.vertices = vertices.get();
-    view.triangle_ids = triangle_ids.get();
-    return Status::Ok();
-  }
-};
-
-}  // namespace
-
-struct DeviceModel::Buffers {
-  DeviceTriangleTree triangles;
-  DeviceTriangleTree cone;
-  DeviceTriangleTree sheets;
-  DeviceBuffer<WideNodeLength> cone_lengths;
-  DeviceBuffer<ConeSegment> cone_segments;
-  DeviceBuffer<WideNode> segment_nodes;
-  DeviceBuffer<vec3> endpoints;
-  DeviceBuffer<uint32_t> segment_ids;
-  DeviceBuffer<SmoothRegion> smooth_regions;
-  ModelView view;
-};
 
 bool device_available(std::string* why) {
   int count = 0;

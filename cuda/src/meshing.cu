@@ -7,7 +7,7 @@
 namespace gwnrt::cuda {
 
 Status extract_surface(const DeviceModel& device, const GwnModel& model, const MeshingOptions& options,
-                       SurfaceMesh& out, MeshingStats* stats) {
+                       SurfaceMesh& out, MeshingStats* stats, Stream stream) {
   MeshingStats local;
   MeshingStats& st = stats ? *stats : local;
   st = MeshingStats{};
@@ -22,6 +22,7 @@ Status extract_surface(const DeviceModel& device, const GwnModel& model, const M
               "cuda::extract_surface: the device model is not an upload of this model with its sheets "
               "(DeviceModel::upload after the last set_sheet_level)"};
     CudaBackend backend;
+    backend.stream = stream;
     const ScoutQuery scout{view, options.level, options.winding.taylor.beta, plan.use_sheets};
     if (Status s = run_dual_contouring(backend, view, options, plan.grid, scout, out, st); !s.ok()) {
       out = SurfaceMesh{};

@@ -1,5 +1,4 @@
 // Batch queries on the GPU: one thread per point, each running the core's evaluate_point.
-#include "gwnrt/cuda.h"
 #include "gwnrt/sdf/point_query.h"
 #include "map_on_device.cuh"
 
@@ -15,15 +14,15 @@ struct EvaluatePoint {
 }  // namespace
 
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
-                       std::span<PointResult> results) {
+                       std::span<PointResult> results, Stream stream) {
   const ModelView view = model.view();
   return map_batch_on_device(
-      "evaluate_points", view, points, results, 128,
+      "evaluate_points", model, points, results, 128,
       [&] {
         if (Status s = validate_points(points); !s.ok()) return s;
         return validate_request(request, &view);
       },
-      EvaluatePoint{view, request});
+      EvaluatePoint{view, request}, stream);
 }
 
 }  // namespace gwnrt::cuda

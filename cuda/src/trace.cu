@@ -1,6 +1,5 @@
 // Ray tracing on the GPU: one thread per ray, each running the core's trace_surface.
 #include "gwnrt/batch.h"
-#include "gwnrt/cuda.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "map_on_device.cuh"
 
@@ -16,15 +15,16 @@ struct TraceRay {
 }  // namespace
 
 Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits) {
+                  std::span<RayHit> hits, Stream stream) {
   // Smaller blocks than for points: rays diverge in cost and hold a larger stack.
+  const ModelView view = model.view();
   return map_batch_on_device(
-      "trace_rays", model.view(), rays, hits, 64,
+      "trace_rays", model, rays, hits, 64,
       [&] {
         if (Status s = validate_trace_options(options); !s.ok()) return s;
-        return validate_trace_view(model.view());
+        return validate_trace_view(view);
       },
-      TraceRay{model.view(), options});
+      TraceRay{view, options}, stream);
 }
 
 }  // namespace gwnrt::cuda

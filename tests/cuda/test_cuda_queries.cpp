@@ -101,6 +101,30 @@ TEST_P(CudaQueries, SignedDistanceMatchesTheCpuBackend) {
 
 INSTANTIATE_TEST_SUITE_P(Meshes, CudaQueries, ::testing::Values("bunny.obj", "bunny_holes.obj", "teapot.obj"));
 
+// The scratch a DeviceModel keeps between batches (issue 17 item 1): batches that grow, shrink
+// and grow again past it give the CPU's w each time (a stale or short buffer would not).
+TEST(CudaBackend, BatchesReuseAndGrowTheScratch) {
+  std::string why;
+  if (!cuda::device_available(&why)) GTEST_SKIP() << "CUDA tests skipped: " << why;
+  const GwnModel model = test::build_model(test::load_test_mesh("bunny_holes.obj"));
+  cuda::DeviceModel device;
+  ASSERT_TRUE(cuda::DeviceModel::upload(model, device).ok());
+  QueryRequest request;
+  request.fields = kFieldW | kFieldUnsignedDistance;
+  for (const size_t count : {size_t(1000), size_t(1), size_t(70000), size_t(10), size_t(200000), size_t(3)}) {
+    const auto points = test::sample_points(test::mesh_bounds(model.mesh()), count, uint32_t(count));
+    std::vector<PointResult> cpu(count), gpu(count);
+    ASSERT_TRUE(evaluate_points(model, points, request, cpu).ok());
+    const Status s = cuda::evaluate_points(device, points, request, gpu);
+    ASSERT_TRUE(s.ok()) << s.message();
+    for (size_t i = 0; i < count; ++i) {
+      ASSERT_NEAR(gpu[i].w, cpu[i].w, 1e-4) << count << " points, point " << i;
+      ASSERT_NEAR(gpu[i].unsigned_distance, cpu[i].unsigned_distance, 1e-6f * (1.0f + cpu[i].unsigned_distance))
+          << count << " points, point " << i;
+    }
+  }
+}
+
 TEST(CudaBackend, ReportsWhyNoDeviceIsUsable) {
   std::string why;
   if (cuda::device_available(&why)) GTEST_SKIP() << "a device is present";

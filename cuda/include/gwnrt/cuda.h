@@ -12,7 +12,12 @@
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/meshing/extract_surface.h"
 
+struct CUstream_st;  // cudaStream_t is a CUstream_st*: streams pass without CUDA's headers
+
 namespace gwnrt::cuda {
+
+// A CUDA stream for the calls below (nullptr: the default stream).
+using Stream = CUstream_st*;
 
 // True when a CUDA device can be used; otherwise `why` says what is missing.
 bool device_available(std::string* why = nullptr);
@@ -20,7 +25,10 @@ bool device_available(std::string* why = nullptr);
 // The device memory free now, in bytes (0 without a usable device): a budget for the mesher.
 uint64_t free_device_memory();
 
-// The model's arrays in device memory. Move-only; frees them on destruction.
+// The model's arrays in device memory, resident until destruction, with the scratch buffers the
+// batches copy their inputs and results through: grown when a batch needs more, kept for the
+// next (one batch at a time uses them: concurrent calls on one DeviceModel wait for each other).
+// Move-only.
 class DeviceModel {
  public:
   DeviceModel();
@@ -32,22 +40,23 @@ class DeviceModel {
   ModelView view() const;  // device pointers: pass to kernels only
 
  private:
+  friend struct DeviceAccess;  // cuda/src/device_model.cuh: the batches' way to the buffers
   struct Buffers;
   std::unique_ptr<Buffers> buffers_;
 };
 
 // GPU counterpart of gwnrt::trace_rays (the same trace_surface per ray); hits in input order.
 Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits);
+                  std::span<RayHit> hits, Stream stream = nullptr);
 
 // GPU counterpart of gwnrt::evaluate_points; results in input order.
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
-                       std::span<PointResult> results);
+                       std::span<PointResult> results, Stream stream = nullptr);
 
 // GPU counterpart of gwnrt::extract_surface: the same driver and passes on the CUDA backend
 // (scans and compaction with CUB). `model` is the host model `device` was uploaded from (the
 // grid, the attributes and the soup are made on the host from it).
 Status extract_surface(const DeviceModel& device, const GwnModel& model, const MeshingOptions& options,
-                       SurfaceMesh& out, MeshingStats* stats = nullptr);
+                       SurfaceMesh& out, MeshingStats* stats = nullptr, Stream stream = nullptr);
 
 }  // namespace gwnrt::cuda
