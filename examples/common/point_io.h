@@ -14,6 +14,7 @@
 #include "gwnrt/hd.h"
 #include "gwnrt/io/read_file.h"
 #include "gwnrt/status.h"
+#include "gwnrt/trace/ray.h"
 
 namespace gwnrt::examples {
 
@@ -135,6 +136,32 @@ inline Status read_points(const std::string& path, std::vector<vec3>& points) {
   std::string text, source;
   if (Status s = read_text(path, text, source); !s.ok()) return s;
   return parse_points(text, source, points);
+}
+
+// One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf.
+inline Status read_rays(const std::string& path, std::vector<Ray>& rays) {
+  std::string text, source;
+  if (Status s = read_text(path, text, source); !s.ok()) return s;
+  rays.clear();
+  return parse_rows(
+      text, source, {6, 8}, "6 or 8 numbers (ox oy oz dx dy dz [tnear tfar])", [](int column) { return column == 7; },
+      [&](const float* v, int count, size_t) -> Status {
+        Ray r;
+        r.origin = vec3(v[0], v[1], v[2]);
+        r.direction = vec3(v[3], v[4], v[5]);
+        if (r.direction == vec3(0.0f)) return {StatusCode::kParseError, "ray direction is zero"};
+        if (!(glm::length(dvec3(r.direction)) >= double(kMinDirectionLength)))
+          return {StatusCode::kParseError, "ray direction is too short to normalise (below 1.2e-38)"};
+        if (!std::isfinite(glm::length(r.direction)))
+          return {StatusCode::kParseError, "ray direction is too long (its length overflows a float)"};
+        if (count == 8) {
+          r.tnear = v[6];
+          r.tfar = v[7];
+          if (!(r.tnear <= r.tfar)) return {StatusCode::kParseError, "tnear must not exceed tfar"};
+        }
+        rays.push_back(r);
+        return Status::Ok();
+      });
 }
 
 }  // namespace gwnrt::examples

@@ -44,32 +44,6 @@ using gwnrt::examples::seconds_since;
 
 constexpr const char* kProgram = "gwnrt-trace";
 
-// One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf.
-Status read_rays(const std::string& path, std::vector<Ray>& rays) {
-  std::string text, source;
-  if (Status s = gwnrt::examples::read_text(path, text, source); !s.ok()) return s;
-  rays.clear();
-  return gwnrt::examples::parse_rows(
-      text, source, {6, 8}, "6 or 8 numbers (ox oy oz dx dy dz [tnear tfar])", [](int column) { return column == 7; },
-      [&](const float* v, int count, size_t) -> Status {
-        Ray r;
-        r.origin = vec3(v[0], v[1], v[2]);
-        r.direction = vec3(v[3], v[4], v[5]);
-        if (r.direction == vec3(0.0f)) return {StatusCode::kParseError, "ray direction is zero"};
-        if (!(glm::length(glm::dvec3(r.direction)) >= double(gwnrt::kMinDirectionLength)))
-          return {StatusCode::kParseError, "ray direction is too short to normalise (below 1.2e-38)"};
-        if (!std::isfinite(glm::length(r.direction)))
-          return {StatusCode::kParseError, "ray direction is too long (its length overflows a float)"};
-        if (count == 8) {
-          r.tnear = v[6];
-          r.tfar = v[7];
-          if (!(r.tnear <= r.tfar)) return {StatusCode::kParseError, "tnear must not exceed tfar"};
-        }
-        rays.push_back(r);
-        return Status::Ok();
-      });
-}
-
 const char* kind_name(gwnrt::HitKind kind) {
   switch (kind) {
     case gwnrt::HitKind::kSheet:
@@ -153,7 +127,7 @@ int main(int argc, char** argv) {
   const gwnrt::examples::ThreadLimit thread_limit(threads);
 
   std::vector<Ray> rays;
-  if (Status s = read_rays(rays_path, rays); !s.ok()) return fail(kProgram, s.message());
+  if (Status s = gwnrt::examples::read_rays(rays_path, rays); !s.ok()) return fail(kProgram, s.message());
   // Checked before the model is built and the hits allocated: with overcommit a size beyond memory would kill the
   // process later.
   if (Status s = gwnrt::check_memory(
