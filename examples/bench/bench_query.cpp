@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_checks.h"
+#include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/geometry/mesh.h"
@@ -49,11 +52,14 @@ double sheet_seconds(const Mesh& mesh, WindingMethod method) {
   return model.timings().sheet_seconds;
 }
 
-double time_batch(const GwnModel& model, const std::vector<vec3>& points, const QueryRequest& request,
+// A backend's evaluate_points: the CPU's on the model, or the GPU's on its upload.
+using Evaluate = std::function<Status(std::span<const vec3>, const QueryRequest&, std::span<PointResult>)>;
+
+double time_batch(const Evaluate& evaluate, const std::vector<vec3>& points, const QueryRequest& request,
                   std::vector<PointResult>& results) {
   results.resize(points.size());
   const auto t0 = clock_type::now();
-  const Status s = evaluate_points(model, points, request, results);
+  const Status s = evaluate(points, request, results);
   const double sec = std::chrono::duration<double>(clock_type::now() - t0).count();
   if (!s.ok()) examples::die(kProgram, s.message());
   return sec;
@@ -93,7 +99,18 @@ int main(int argc, char** argv) {
                  "as a ratio to it (scripts/bench-distance.sh runs the two interleaved)");
   std::string json_path;
   app.add_option("--json", json_path, "also write every row and the build timings to this JSON file");
+  std::string device = "cpu";
+  app.add_option("--device", device,
+                 std::string(examples::kDeviceHelp) +
+                     ". On the GPU each mode's time includes copying its points up and results down, not the "
+                     "model's upload; the brute-force baseline stays on the CPU (a CPU run's --json as "
+                     "--baseline-json gives GPU over CPU)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   CLI11_PARSE(app, argc, argv);
+  bool use_cuda = false;
+  if (Status s = examples::choose_device(kProgram, device, use_cuda); !s.ok())
+    return examples::fail(kProgram, s.message());
 
   // Checked before the mesh is loaded: the points, their subset for the brute force, and the two
   // result arrays.
@@ -161,6 +178,26 @@ int main(int argc, char** argv) {
 
   const std::vector<vec3> points = point_mix(box, count, seed);
   std::vector<PointResult> results, reference;
+  const Evaluate on_cpu = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
+    return evaluate_points(model, p, q, r);
+  };
+  Evaluate evaluate = on_cpu;
+#if defined(GWNRT_HAVE_CUDA)
+  cuda::DeviceModel device_model;
+  if (use_cuda) {
+    const auto tu = clock_type::now();
+    if (Status s = cuda::DeviceModel::upload(model, device_model); !s.ok())
+      return examples::fail(kProgram, s.message());
+    evaluate = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
+      return cuda::evaluate_points(device_model, p, q, r);
+    };
+    // The first launch pays for the context and the scratch: not in any mode's time.
+    std::vector<PointResult> warm(points.size());
+    if (Status s = evaluate(points, QueryRequest{}, warm); !s.ok()) return examples::fail(kProgram, s.message());
+    std::printf("device          cuda (upload %.3f s, then a warm-up batch)\n\n",
+                std::chrono::duration<double>(clock_type::now() - tu).count());
+  }
+#endif
 
   // Brute force: grow the subset until it fills the time budget (its cost is O(n) per point).
   QueryRequest brute;
@@ -169,7 +206,7 @@ int main(int argc, char** argv) {
   double brute_sec = 0;
   for (;;) {
     std::vector<vec3> subset(points.begin(), points.begin() + std::min(brute_count, points.size()));
-    brute_sec = time_batch(model, subset, brute, reference);
+    brute_sec = time_batch(on_cpu, subset, brute, reference);
     if (brute_sec > 0.25 * brute_seconds || subset.size() == points.size()) break;
     // In double: a budget of 1e39 s would overflow the count's integer arithmetic.
     const double grown = double(brute_count) * std::max(2.0, 0.5 * brute_seconds / std::max(brute_sec, 1e-3));
@@ -206,7 +243,7 @@ int main(int argc, char** argv) {
     request.method = m.method;
     request.taylor = {m.order, beta};
     request.fields = m.fields;
-    const double sec = time_batch(model, points, request, results);
+    const double sec = time_batch(evaluate, points, request, results);
     Row row{m.name, points.size(), sec};
     if (m.fields & kFieldW) {
       row.max_error = 0;
@@ -268,6 +305,7 @@ int main(int argc, char** argv) {
     out["boundary_segments"] = model.boundary().segment_count();
     out["cone_triangles"] = view.cone.triangle_count;
     out["threads"] = workers;
+    out["device"] = use_cuda ? "cuda" : "cpu";
     out["beta"] = beta;
     out["auto_method"] = winding_method_name(auto_method);
     out["build"] = {{"load_seconds", load_sec},
