@@ -64,6 +64,8 @@ step build cmake --build build-gpu --parallel "$(nproc)" --target gwnrt_cuda_tes
 
 bin=build-gpu/examples
 step cuda-tests build-gpu/tests/gwnrt_cuda_tests --gtest_output="json:$out/cuda-tests.json"
+# Every quantity on the bundled meshes, with gwnrt-render's first hit at 1920x1080 (its frames/s:
+# the target is >= 60 on bunny_holes; gwnrt-render itself needs Embree and OpenImageIO).
 step consistency "$bin/gwnrt-consistency" --json "$out/consistency.json"
 
 dragon=""
@@ -93,5 +95,4 @@ for device in cuda cpu; do
 done
 rm -f "$out"/bunny-512-*.ply
 
-echo "first-hit rendering on the GPU (gwnrt-render --device cuda): not built yet" | tee -a "$summary"
 echo "gpu-check: done in $((SECONDS - start)) s; logs and JSON in $out" | tee -a "$summary"

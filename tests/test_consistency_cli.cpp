@@ -34,9 +34,9 @@ TEST_F(ConsistencyCli, ExitsTwoWithItsReasonWithoutAUsableGpu) {
 
 TEST_F(ConsistencyCli, AgainstItselfEveryQuantityAgrees) {
   const std::string json = test::temp_path("consistency.json");
-  const test::RunResult r =
-      test::run_program(binary_, "--against cpu --count 3000 --resolution 24 --threads 2 --mesh " +
-                                     test::quote(test::data_path("bunny_holes.obj")) + " --json " + test::quote(json));
+  const test::RunResult r = test::run_program(
+      binary_, "--against cpu --count 3000 --resolution 24 --image-width 64 --image-height 48 --threads 2 --mesh " +
+                   test::quote(test::data_path("bunny_holes.obj")) + " --json " + test::quote(json));
   ASSERT_TRUE(r.exited);
   ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
   EXPECT_NE(r.out.find("\nconsistent"), std::string::npos) << r.out;

@@ -655,14 +655,22 @@ TEST_F(FuzzCli, Consistency) {
   const std::string b = test::example_binary("gwnrt-consistency");
   if (b.empty()) GTEST_SKIP() << "gwnrt-consistency is not built next to the tests";
   // Against the CPU itself: the whole comparison runs without a GPU.
-  ProgramCase c{
-      b, "--against cpu", {{"--mesh", open_mesh_}, {"--count", "64"}, {"--resolution", "8"}, {"--rays", rays_}}};
+  ProgramCase c{b,
+                "--against cpu",
+                {{"--mesh", open_mesh_},
+                 {"--count", "64"},
+                 {"--resolution", "8"},
+                 {"--rays", rays_},
+                 {"--image-width", "16"},
+                 {"--image-height", "12"}}};
   c.options = {{"--mesh", hostile_meshes(4)},
                {"--points", hostile_rows("points", "0.2 0.3 0.4\n")},
                {"--rays", hostile_rows("rays", "0 0 -5 0 0 1\n")},
                {"--count"},
                {"--resolution"},
                {"--against", {"", "gpu", "cuda"}},
+               {"--image-width"},
+               {"--image-height"},
                {"--threads"},
                {"--json", {"", "/proc/x.json", out("no/such/dir/x.json"), "/dev/full"}}};
   add_shape_errors(c, true);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "gwnrt/geometry/bvh.h"
+#include "gwnrt/hd.h"
 #include "gwnrt/trace/ray.h"
 
 namespace gwnrt::examples {
@@ -16,8 +17,8 @@ struct PinholeCamera {
   int width = 1, height = 1;
 
   // The ray through the point (x + u, y + v) of the image plane (row 0 at the top), unit
-  // direction; the default is the centre of pixel (x, y).
-  Ray ray(int x, int y, float u = 0.5f, float v = 0.5f) const {
+  // direction; the default is the centre of pixel (x, y). Host and device (first-hit on the GPU).
+  GWNRT_HD Ray ray(int x, int y, float u = 0.5f, float v = 0.5f) const {
     const float aspect = float(width) / float(height);
     const float sx = (2.0f * (float(x) + u) / float(width) - 1.0f) * tan_half_fov * aspect;
     const float sy = (1.0f - 2.0f * (float(y) + v) / float(height)) * tan_half_fov;

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include <tbb/parallel_for.h>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,7 @@
 #include "cli_checks.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/meshing/extract_surface.h"
+#include "integrators/first_hit_pixel.h"
 #include "load_model.h"
 #include "point_io.h"
 #include "point_mix.h"
@@ -34,6 +36,7 @@
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "gwnrt/cuda.h"
+#include "integrators/first_hit_cuda.h"
 #endif
 
 namespace {
@@ -50,6 +53,10 @@ struct Backend {
   std::function<Status(std::span<const vec3>, const QueryRequest&, std::span<PointResult>)> points;
   std::function<Status(std::span<const Ray>, const TraceOptions&, std::span<RayHit>)> rays;
   std::function<Status(const MeshingOptions&, SurfaceMesh&, MeshingStats&)> mesh;
+  // gwnrt-render's first-hit pixels, `frames` times; seconds: one frame's.
+  std::function<Status(const examples::PinholeCamera&, const render::FirstHitSettings&, int,
+                       std::vector<render::FirstHitSample>&, double&)>
+      first_hit;
 };
 
 Backend cpu_backend(const GwnModel& model) {
@@ -59,7 +66,21 @@ Backend cpu_backend(const GwnModel& model) {
         return evaluate_points(model, p, q, r);
       },
       [&](std::span<const Ray> r, const TraceOptions& o, std::span<RayHit> h) { return trace_rays(model, r, o, h); },
-      [&](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) { return extract_surface(model, o, m, &s); }};
+      [&](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) { return extract_surface(model, o, m, &s); },
+      [&](const examples::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
+          std::vector<render::FirstHitSample>& pixels, double& seconds) {
+        const ModelView view = model.view();
+        pixels.resize(size_t(camera.width) * size_t(camera.height));
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int f = 0; f < frames; ++f)
+          tbb::parallel_for(0, camera.height, [&](int y) {
+            for (int x = 0; x < camera.width; ++x)
+              pixels[size_t(y) * size_t(camera.width) + size_t(x)] =
+                  render::first_hit_pixel(view, camera, settings, x, y);
+          });
+        seconds = seconds_since(t0) / frames;
+        return Status::Ok();
+      }};
 }
 
 // One quantity's comparison: per item a difference already scaled so that the tolerance applies
@@ -171,6 +192,33 @@ class Comparison {
     return Status::Ok();
   }
 
+  // gwnrt-render's first hit: hit or miss, kind, colour; the rates are frames a second.
+  Status first_hit(const examples::PinholeCamera& camera, int frames) {
+    std::vector<render::FirstHitSample> pa, pb;
+    const render::FirstHitSettings settings;
+    Timed t;
+    if (Status s = a_.first_hit(camera, settings, frames, pa, t.cpu); !s.ok()) return named("first hit", s);
+    if (Status s = b_.first_hit(camera, settings, frames, pb, t.gpu); !s.ok()) return named("first hit", s);
+    const std::string frame = std::to_string(camera.width) + "x" + std::to_string(camera.height);
+    std::vector<Row> rows = {{mesh_, "first-hit hit " + frame, "0/1", 0.0},
+                             {mesh_, "first-hit kind " + frame, "0/1", 0.0},
+                             {mesh_, "first-hit colour " + frame, "max channel", 1e-2}};
+    for (size_t i = 0; i < pa.size(); ++i) {
+      const bool ha = pa[i].trace.kind != HitKind::kNone, hb = pb[i].trace.kind != HitKind::kNone;
+      rows[0].add(ha != hb);
+      if (!(ha && hb)) continue;
+      rows[1].add(pa[i].trace.kind != pb[i].trace.kind);
+      const vec3 d = glm::abs(pa[i].colour - pb[i].colour);
+      rows[2].add(std::max({d.x, d.y, d.z}));
+    }
+    for (Row& r : rows) {  // one item a frame: frames per second
+      r.cpu_per_second = t.cpu > 0 ? 1.0 / t.cpu : 0.0;
+      r.gpu_per_second = t.gpu > 0 ? 1.0 / t.gpu : 0.0;
+      rows_.push_back(r);
+    }
+    return Status::Ok();
+  }
+
   std::vector<Row>& rows() { return rows_; }
 
  private:
@@ -199,7 +247,8 @@ class Comparison {
 
 Status compare_mesh(const std::string& path, const Backend& cpu, const Backend& other,
                     const std::vector<vec3>* given_points, const std::vector<Ray>* given_rays, size_t count,
-                    uint32_t resolution, const GwnModel& model, std::vector<Row>& all) {
+                    uint32_t resolution, int image_width, int image_height, const GwnModel& model,
+                    std::vector<Row>& all) {
   const Aabb box = model.bounds();
   const float diag = glm::length(box.hi - box.lo);
   const std::vector<vec3> points = given_points ? *given_points : point_mix(box, count, 7);
@@ -296,6 +345,10 @@ Status compare_mesh(const std::string& path, const Backend& cpu, const Backend& 
     }
   }
   if (Status s = c.rays(rays, TraceOptions{}, diag); !s.ok()) return s;
+  // Three frames, for the rate.
+  if (image_width > 0) {
+    if (Status s = c.first_hit(examples::frame_box(box, image_width, image_height), 3); !s.ok()) return s;
+  }
   if (resolution > 0) {
     MeshingOptions options;
     options.resolution = resolution;
@@ -325,6 +378,11 @@ int main(int argc, char** argv) {
   app.add_option("--resolution", resolution, "Meshing grid (cells along the longest side; 0: no meshing)")
       ->capture_default_str()
       ->check(CLI::Range(0, 2048));
+  int image_width = 1920, image_height = 1080;
+  app.add_option("--image-width", image_width, "gwnrt-render's first hit at this width (0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 16384));
+  app.add_option("--image-height", image_height, "and height")->capture_default_str()->check(CLI::Range(1, 16384));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(examples::positive_number());
   app.add_option("--against", against, "The second backend: cuda, or cpu to check this program without a GPU")
       ->capture_default_str()
@@ -382,11 +440,16 @@ int main(int argc, char** argv) {
                },
                [&](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) {
                  return cuda::extract_surface(device, model, o, m, &s);
+               },
+               [&](const examples::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
+                   std::vector<render::FirstHitSample>& pixels, double& seconds) {
+                 return render::render_first_hit_cuda(device, camera, settings, frames, pixels, seconds);
                }};
     }
 #endif
     if (Status s = compare_mesh(path, cpu, other, points_path.empty() ? nullptr : &given_points,
-                                rays_path.empty() ? nullptr : &given_rays, count, resolution, model, rows);
+                                rays_path.empty() ? nullptr : &given_rays, count, resolution, image_width, image_height,
+                                model, rows);
         !s.ok())
       return examples::fail(kProgram, s.message());
   }

@@ -18,6 +18,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "image_output.h"
 #include "integrators/first_hit.h"
@@ -168,6 +169,15 @@ int main(int argc, char** argv) {
       ->type_name("B")
       ->capture_default_str();
   app.add_option("--threads", threads, "CPU threads (default: all)")->type_name("N");
+  std::string device = "cpu";
+  int64_t frames = 1;
+  app.add_option("--device", device, std::string("First hit: ") + gwnrt::examples::kDeviceHelp)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+  app.add_option("--frames", frames,
+                 "First hit: render the image N times and print frames per second (the last is written)")
+      ->type_name("N")
+      ->capture_default_str();
   app.add_option("--stats-image", stats_path,
                  "Also write a false-colour image of Harnack steps per pixel (.png, or .exr with the raw counts)")
       ->type_name("FILE");
@@ -214,7 +224,7 @@ int main(int argc, char** argv) {
     // The first hit's own options would be silently ignored here (`--level 1e39` exited 0): a
     // scene file sets the surface per GWN object.
     for (const char* name : {"--shading", "--azimuth", "--elevation", "--fov", "--mode", "--level", "--eps",
-                             "--max-steps", "--beta", "--stats-image"})
+                             "--max-steps", "--beta", "--stats-image", "--device", "--frames"})
       if (app.count(name))
         return fail(std::string(name) +
                     " is an option of --integrator first-hit (a scene file sets the surface and "
@@ -269,5 +279,8 @@ int main(int argc, char** argv) {
   job.elevation = float(elevation);
   job.fov_degrees = float(fov);
   job.threads = threads;
+  if (frames < 1 || frames > 100000) return fail("--frames must lie in [1, 100000], got " + std::to_string(frames));
+  job.frames = int(frames);
+  job.device = device;
   return guarded([&] { return gwnrt::render::run_first_hit_job(job, description); });
 }

@@ -68,6 +68,31 @@ TEST_F(RenderCli, FirstHitIntegratorRenders) {
                ".png", 24, 16);
 }
 
+// Issue 17 item 4: --frames renders N times and prints the rate; --device cuda renders on the GPU
+// or fails saying why; --frames 0 is refused.
+TEST_F(RenderCli, FirstHitFramesAndDevice) {
+  const std::string base = test::quote(test::data_path("bunny_holes.obj")) +
+                           " --integrator first-hit --width 32 --height 24 -o " + test::quote(test::temp_path("f.png"));
+  const test::RunResult frames = test::run_program(binary_, base + " --frames 3");
+  ASSERT_TRUE(frames.exited);
+  ASSERT_EQ(frames.exit_code, 0) << frames.err;
+  EXPECT_NE(frames.out.find("3 frames, "), std::string::npos) << frames.out;
+  EXPECT_NE(frames.out.find(" frames/s ("), std::string::npos) << frames.out;
+  const test::RunResult cuda = test::run_program(binary_, base + " --device cuda --frames 2");
+  ASSERT_TRUE(cuda.exited);
+  if (cuda.exit_code != 0) {
+    EXPECT_EQ(cuda.exit_code, 1);
+    EXPECT_NE(cuda.err.find("--device cuda: "), std::string::npos) << cuda.err;
+  } else {
+    EXPECT_NE(cuda.out.find("on the GPU"), std::string::npos) << cuda.out;
+  }
+  for (const char* bad : {" --frames 0", " --frames -2", " --device gpu"}) {
+    const test::RunResult r = test::run_program(binary_, base + bad);
+    ASSERT_TRUE(r.exited);
+    EXPECT_EQ(r.exit_code, 1) << bad;
+  }
+}
+
 TEST_F(RenderCli, BadInputIsRefusedWithAMessage) {
   const std::string bad = test::temp_path("bad.json");
   {
@@ -100,7 +125,8 @@ TEST_F(RenderCli, ZeroOrNegativeCountsAreRefused) {
 
 TEST_F(RenderCli, FirstHitOptionsAreRefusedForThePathTracer) {
   // Issue 15: `--level 1e39` and `--eps 0` exited 0 with the path tracer, which ignored them.
-  for (const std::string args : {" --level 1e39", " --eps 0", " --level 0.3", " --mode solid-angle", " --beta 3"}) {
+  for (const std::string args : {" --level 1e39", " --eps 0", " --level 0.3", " --mode solid-angle", " --beta 3",
+                                 " --device cpu", " --frames 2"}) {
     SCOPED_TRACE(args);
     const test::RunResult r = test::run_program(
         binary_, test::quote(kScene) + " --width 8 --height 8 -o " + test::quote(test::temp_path("p.png")) + args);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/io/memory.h"
@@ -16,27 +17,29 @@
 #include "tiles.h"
 #include "trace_level.h"
 
+#if defined(GWNRT_HAVE_CUDA)
+#include "integrators/first_hit_cuda.h"
+#endif
+
 namespace gwnrt::render {
 
-void FirstHitStats::add(const RayHit& hit, const vec3& dir, const TraceOptions& options) {
+void FirstHitStats::add(const FirstHitSample& pixel, const TraceOptions& options) {
+  const PixelTrace& t = pixel.trace;
   ++rays;
-  steps += hit.steps;
-  crossings += hit.crossings;
-  max_steps = std::max(max_steps, hit.steps);
-  if (hit.invalid) ++invalid;
-  if (hit.capped) {
+  steps += t.steps;
+  crossings += t.crossings;
+  max_steps = std::max(max_steps, t.steps);
+  if (pixel.invalid) ++invalid;
+  if (t.capped) {
     // RayHit says only that a cap ended the trace; which one is told by the count that reached it.
-    if (hit.steps >= options.max_steps)
+    if (t.steps >= options.max_steps)
       ++step_capped;
     else
       ++crossing_capped;
   }
-  if (!hit.hit) return;
-  if (hit.kind == HitKind::kSmooth)
-    ++smooth_hits;
-  else
-    ++sheet_hits;
-  if (glm::dot(hit.normal, dir) > 0.0f) ++facing_away;
+  if (t.kind == HitKind::kSmooth) ++smooth_hits;
+  if (t.kind == HitKind::kSheet) ++sheet_hits;
+  if (pixel.facing_away) ++facing_away;
 }
 
 FirstHitStats& FirstHitStats::operator+=(const FirstHitStats& o) {
@@ -69,17 +72,11 @@ FirstHitRender render_first_hit(const ModelView& model, const examples::PinholeC
   parallel_for_tiles(grid, [&](const Tile& tile) {
     FirstHitStats& stats = tile_stats[std::size_t(tile.index)];
     for (int y = tile.y0; y < tile.y1; ++y) {
-      const float v = (float(y) + 0.5f) / float(height);
       for (int x = tile.x0; x < tile.x1; ++x) {
-        const Ray ray = camera.ray(x, y);
-        const RayHit hit = trace_surface(model, ray, settings.trace);
-        out.colour.set_rgb(x, y, shade_primary(hit, ray.direction, v, settings.shading));
-        PixelTrace& trace = out.traces[std::size_t(y) * std::size_t(width) + std::size_t(x)];
-        trace.steps = hit.steps;
-        trace.crossings = hit.crossings;
-        trace.kind = hit.hit ? hit.kind : HitKind::kNone;
-        trace.capped = hit.capped;
-        stats.add(hit, ray.direction, settings.trace);
+        const FirstHitSample pixel = first_hit_pixel(model, camera, settings, x, y);
+        out.colour.set_rgb(x, y, pixel.colour);
+        out.traces[std::size_t(y) * std::size_t(width) + std::size_t(x)] = pixel.trace;
+        stats.add(pixel, settings.trace);
       }
     }
     if (progress) progress->fetch_add(std::size_t(tile.pixel_count()), std::memory_order_relaxed);
@@ -87,6 +84,22 @@ FirstHitRender render_first_hit(const ModelView& model, const examples::PinholeC
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   for (const FirstHitStats& s : tile_stats) out.stats += s;
+  return out;
+}
+
+FirstHitRender first_hit_image(const std::vector<FirstHitSample>& pixels, const examples::PinholeCamera& camera,
+                               const FirstHitSettings& settings, double seconds) {
+  FirstHitRender out;
+  out.colour = Image(camera.width, camera.height, {"R", "G", "B"});
+  out.traces.resize(pixels.size());
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
+      const FirstHitSample& p = pixels[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)];
+      out.colour.set_rgb(x, y, p.colour);
+      out.traces[std::size_t(y) * std::size_t(camera.width) + std::size_t(x)] = p.trace;
+      out.stats.add(p, settings.trace);
+    }
+  out.seconds = seconds;
   return out;
 }
 
@@ -138,6 +151,10 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
       !s.ok())
     return examples::fail(kProgram, s.message());
 
+  bool use_cuda = false;
+  if (Status s = examples::choose_device(kProgram, job.device, use_cuda); !s.ok())
+    return examples::fail(kProgram, s.message());
+
   GwnModel model;
   examples::ModelLoad loaded;
   if (Status s = examples::load_model(job.mesh, model, loaded); !s.ok()) return examples::fail(kProgram, s.message());
@@ -160,22 +177,43 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   const auto finite = [](const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
   if (!finite(camera.eye) || !finite(camera.forward) || !finite(camera.right) || !finite(camera.up))
     return examples::fail(kProgram, job.mesh + ": the mesh is too large to frame with a camera in float");
-  std::atomic<size_t> progress{0};
   FirstHitRender render;
-  {
-    examples::ProgressBar bar(progress, size_t(job.width) * size_t(job.height), "px");
-    render = render_first_hit(model_view(model), camera, job.settings, &progress);
+  std::string where = count_of(thread_limit.workers(), "thread");
+  if (use_cuda) {
+#if defined(GWNRT_HAVE_CUDA)
+    cuda::DeviceModel device_model;
+    if (Status s = cuda::DeviceModel::upload(model, device_model); !s.ok())
+      return examples::fail(kProgram, job.mesh + ": " + s.message());
+    std::vector<FirstHitSample> pixels;
+    if (Status s = render_first_hit_cuda(device_model, camera, job.settings, job.frames, pixels, render.seconds);
+        !s.ok())
+      return examples::fail(kProgram, job.mesh + ": " + s.message());
+    render = first_hit_image(pixels, camera, job.settings, render.seconds);
+    where = "the GPU";
+#endif
+  } else {
+    std::atomic<size_t> progress{0};
+    examples::ProgressBar bar(progress, size_t(job.width) * size_t(job.height) * size_t(job.frames), "px");
+    double seconds = 0;
+    for (int f = 0; f < job.frames; ++f) {
+      render = render_first_hit(model_view(model), camera, job.settings, &progress);
+      seconds += render.seconds;
+    }
+    render.seconds = seconds / job.frames;
   }
 
   const FirstHitStats& stats = render.stats;
   const double rays_per_second = render.seconds > 0 ? double(stats.rays) / render.seconds : 0.0;
+  if (job.frames > 1)
+    std::printf("%s: %d frames, %.4g frames/s (%.3f ms a frame%s)\n", kProgram, job.frames,
+                render.seconds > 0 ? 1.0 / render.seconds : 0.0, 1e3 * render.seconds,
+                use_cuda ? ", its pixels copied to the host; the upload not counted" : "");
   std::printf(
       "%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
       "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
-      kProgram, job.width, job.height, render.seconds, count_of(thread_limit.workers(), "thread").c_str(),
-      examples::human_count(rays_per_second).c_str(), stats.mean_steps(), stats.max_steps, stats.mean_crossings(),
-      (unsigned long long)stats.sheet_hits, (unsigned long long)stats.smooth_hits,
-      (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
+      kProgram, job.width, job.height, render.seconds, where.c_str(), examples::human_count(rays_per_second).c_str(),
+      stats.mean_steps(), stats.max_steps, stats.mean_crossings(), (unsigned long long)stats.sheet_hits,
+      (unsigned long long)stats.smooth_hits, (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
       (unsigned long long)(stats.step_capped + stats.crossing_capped));
   std::fflush(stdout);
   if (stats.step_capped) {

@@ -14,17 +14,9 @@
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "image.h"
-#include "shading.h"
+#include "integrators/first_hit_pixel.h"
 
 namespace gwnrt::render {
-
-// What one primary ray cost and found.
-struct PixelTrace {
-  uint32_t steps = 0;      // Harnack evaluations
-  uint32_t crossings = 0;  // triangle crossings walked
-  HitKind kind = HitKind::kNone;
-  bool capped = false;
-};
 
 struct FirstHitStats {
   uint64_t rays = 0;
@@ -38,15 +30,10 @@ struct FirstHitStats {
   uint64_t facing_away = 0;      // hits whose outward normal points away from the eye
   uint32_t max_steps = 0;        // the most Harnack steps any one ray took
 
-  void add(const RayHit& hit, const vec3& dir, const TraceOptions& options);
+  void add(const FirstHitSample& pixel, const TraceOptions& options);
   FirstHitStats& operator+=(const FirstHitStats& other);
   double mean_steps() const { return rays ? double(steps) / double(rays) : 0.0; }
   double mean_crossings() const { return rays ? double(crossings) / double(rays) : 0.0; }
-};
-
-struct FirstHitSettings {
-  ShadingMode shading = ShadingMode::kHeadlight;
-  TraceOptions trace;
 };
 
 struct FirstHitRender {
@@ -60,6 +47,10 @@ struct FirstHitRender {
 // The trace options must have passed validate_trace_options.
 FirstHitRender render_first_hit(const ModelView& model, const examples::PinholeCamera& camera,
                                 const FirstHitSettings& settings, std::atomic<std::size_t>* progress = nullptr);
+
+// The image, traces and statistics of pixels rendered elsewhere (the GPU), row-major.
+FirstHitRender first_hit_image(const std::vector<FirstHitSample>& pixels, const examples::PinholeCamera& camera,
+                               const FirstHitSettings& settings, double seconds);
 
 // The steps-per-pixel image: log-scaled false colour from 1 step to `scale_max` steps (0: the
 // largest count in the image), dark grey for hits that took no step, black for misses without
@@ -76,6 +67,8 @@ struct FirstHitJob {
   float azimuth = 30.0f, elevation = 20.0f, fov_degrees = 40.0f;  // frame_box's camera
   FirstHitSettings settings;                                      // trace options that passed validate_trace_options
   int threads = 0;                                                // 0: all cores
+  std::string device = "cpu";                                     // cpu, cuda or auto (device_choice.h)
+  int frames = 1;  // renders of the same image, for frames per second (the last is written)
 };
 
 // Loads and builds the mesh, renders it, prints the summary (rays/s, steps, hits, caps) and
