@@ -30,9 +30,9 @@ check_sanitize() {
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
     -DGWNRT_SANITIZE=address,undefined -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
   # The tests and every program they run (test_fuzz_inputs.cpp runs them all on hostile input).
-  cmake --build build-asan --parallel "$jobs" --target gwnrt_tests gwnrt_embree_tests gwnrt_render_tests \
-    gwnrt-query gwnrt-render gwnrt-sdf-study gwnrt-mesh gwnrt-trace gwnrt-bench-trace gwnrt-bench-query \
-    gwnrt-bench-mesh gwnrt-library-example gwnrt-embree-example
+  cmake --build build-asan --parallel "$jobs" --target gwnrt_tests gwnrt_thread_tests gwnrt_embree_tests \
+    gwnrt_render_tests gwnrt-query gwnrt-render gwnrt-sdf-study gwnrt-mesh gwnrt-trace gwnrt-bench-trace \
+    gwnrt-bench-query gwnrt-bench-mesh gwnrt-consistency gwnrt-library-example gwnrt-embree-example
   # Any UBSan report fails its test (no recovery); leaks are reported at exit.
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure --parallel "$jobs"

@@ -58,7 +58,13 @@ INSTANTIATE_TEST_SUITE_P(BundledMeshes, CudaMeshing,
                          ::testing::Values(MeshCase{"bunny.obj", 128, MeshingMethod::kDualContouring},
                                            MeshCase{"bunny_holes.obj", 128, MeshingMethod::kDualContouring},
                                            MeshCase{"bunny_holes.obj", 96, MeshingMethod::kMarchingCubes},
-                                           MeshCase{"teapot.obj", 128, MeshingMethod::kDualContouring}));
+                                           MeshCase{"teapot.obj", 128, MeshingMethod::kDualContouring}),
+                         [](const ::testing::TestParamInfo<MeshCase>& info) {
+                           std::string name = info.param.mesh;
+                           name = name.substr(0, name.find('.')) + "_" + std::to_string(info.param.resolution) +
+                                  (info.param.method == MeshingMethod::kMarchingCubes ? "_mc" : "_dc");
+                           return name;
+                         });
 
 // A model never uploaded, and a device copy of another model, are refused with a message.
 TEST(CudaMeshingErrors, RefusesAMismatchedDeviceModel) {
