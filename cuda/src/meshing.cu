@@ -16,8 +16,12 @@ Status extract_surface(const DeviceModel& device, const GwnModel& model, const M
     if (Status s = plan_meshing(model, options, plan, out, st); !s.ok() || plan.empty) return s;
     const ModelView view = device.view();
     if (!view.triangles.bvh.nodes) return {StatusCode::kInvalidArgument, "cuda::extract_surface: model not uploaded"};
-    if (view.triangles.triangle_count != plan.view.triangles.triangle_count || !(view.parts & kPartSheets) ||
-        view.sheet_level != plan.view.sheet_level)
+    // The same sheets as the host's plan (or none on either: a model built without them meshes
+    // with the distance to M), NaN levels compared as equal.
+    const bool same_sheets = (view.parts & kPartSheets) == (plan.view.parts & kPartSheets) &&
+                             (view.sheet_level == plan.view.sheet_level ||
+                              (view.sheet_level != view.sheet_level && plan.view.sheet_level != plan.view.sheet_level));
+    if (view.triangles.triangle_count != plan.view.triangles.triangle_count || !same_sheets)
       return {StatusCode::kInvalidArgument,
               "cuda::extract_surface: the device model is not an upload of this model with its sheets "
               "(DeviceModel::upload after the last set_sheet_level)"};
