@@ -14,7 +14,7 @@ struct EvaluatePoint {
 }  // namespace
 
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
-                       std::span<PointResult> results, Stream stream) {
+                       std::span<PointResult> results, Stream stream, BatchTimings* timings) {
   const ModelView view = model.view();
   return map_batch_on_device(
       "evaluate_points", model, points, results, 128,
@@ -22,7 +22,7 @@ Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, c
         if (Status s = validate_points(points); !s.ok()) return s;
         return validate_request(request, &view);
       },
-      EvaluatePoint{view, request}, stream);
+      EvaluatePoint{view, request}, stream, timings);
 }
 
 }  // namespace gwnrt::cuda

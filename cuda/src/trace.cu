@@ -15,7 +15,7 @@ struct TraceRay {
 }  // namespace
 
 Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits, Stream stream) {
+                  std::span<RayHit> hits, Stream stream, BatchTimings* timings) {
   // Smaller blocks than for points: rays diverge in cost and hold a larger stack.
   const ModelView view = model.view();
   return map_batch_on_device(
@@ -24,7 +24,7 @@ Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const Tra
         if (Status s = validate_trace_options(options); !s.ok()) return s;
         return validate_trace_view(view);
       },
-      TraceRay{view, options}, stream);
+      TraceRay{view, options}, stream, timings);
 }
 
 }  // namespace gwnrt::cuda

@@ -115,8 +115,11 @@ TEST(CudaBackend, BatchesReuseAndGrowTheScratch) {
     const auto points = test::sample_points(test::mesh_bounds(model.mesh()), count, uint32_t(count));
     std::vector<PointResult> cpu(count), gpu(count);
     ASSERT_TRUE(evaluate_points(model, points, request, cpu).ok());
-    const Status s = cuda::evaluate_points(device, points, request, gpu);
+    cuda::BatchTimings timings;
+    const Status s = cuda::evaluate_points(device, points, request, gpu, nullptr, &timings);
     ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_GT(timings.kernel, 0.0);
+    EXPECT_GT(timings.download, 0.0);
     for (size_t i = 0; i < count; ++i) {
       ASSERT_NEAR(gpu[i].w, cpu[i].w, 1e-4) << count << " points, point " << i;
       ASSERT_NEAR(gpu[i].unsigned_distance, cpu[i].unsigned_distance, 1e-6f * (1.0f + cpu[i].unsigned_distance))

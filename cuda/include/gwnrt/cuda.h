@@ -19,6 +19,13 @@ namespace gwnrt::cuda {
 // A CUDA stream for the calls below (nullptr: the default stream).
 using Stream = CUstream_st*;
 
+// Where a batch's time went on the device, from CUDA events (seconds): its inputs copied up, the
+// kernel, its results copied down (a PointResult is 116 bytes: for w alone the copy down can
+// outlast the kernel).
+struct BatchTimings {
+  double upload = 0, kernel = 0, download = 0;
+};
+
 // True when a CUDA device can be used; otherwise `why` says what is missing.
 bool device_available(std::string* why = nullptr);
 
@@ -47,11 +54,11 @@ class DeviceModel {
 
 // GPU counterpart of gwnrt::trace_rays (the same trace_surface per ray); hits in input order.
 Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const TraceOptions& options,
-                  std::span<RayHit> hits, Stream stream = nullptr);
+                  std::span<RayHit> hits, Stream stream = nullptr, BatchTimings* timings = nullptr);
 
 // GPU counterpart of gwnrt::evaluate_points; results in input order.
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
-                       std::span<PointResult> results, Stream stream = nullptr);
+                       std::span<PointResult> results, Stream stream = nullptr, BatchTimings* timings = nullptr);
 
 // GPU counterpart of gwnrt::extract_surface: the same driver and passes on the CUDA backend
 // (scans and compaction with CUB). `model` is the host model `device` was uploaded from (the
