@@ -25,6 +25,8 @@ constexpr float kSheetAmbiguity = 0.1f;
 // small scattered loops) for the sheets to be classified with it: past that it is C again.
 constexpr size_t kMaxSingleApexSegments = 256;
 
+constexpr const char* kEmptyModel = "GwnModel: empty (GwnModel::build makes one)";
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -161,20 +163,21 @@ uint32_t GwnModel::built_parts() const { return deferral_ ? deferral_->built.loa
 
 Status GwnModel::prepare(uint32_t parts) const {
   if ((built_parts() & parts) == parts) return Status::Ok();
-  if (!deferral_) return {StatusCode::kInvalidArgument, "GwnModel: empty (GwnModel::build makes one)"};
+  if (!deferral_) return {StatusCode::kInvalidArgument, kEmptyModel};
   return guard_status("GwnModel::prepare", [&] {
     std::lock_guard<std::mutex> lock(deferral_->mutex);
-    const uint32_t built = deferral_->built.load(std::memory_order_relaxed);
-    if ((parts & (kPartBoundary | kPartSheets)) && !(built & kPartBoundary)) {
+    if (parts & (kPartBoundary | kPartSheets)) {
       if (Status s = build_boundary(); !s.ok()) return s;
     }
-    if ((parts & kPartSheets) && !(built & kPartSheets) && deferral_->options.classify_sheets)
+    if ((parts & kPartSheets) && !(deferral_->built.load(std::memory_order_relaxed) & kPartSheets) &&
+        deferral_->options.classify_sheets)
       return set_sheet_level_locked(deferral_->options.sheet_level);
     return Status::Ok();
   });
 }
 
 Status GwnModel::build_boundary() const {
+  if (deferral_->built.load(std::memory_order_relaxed) & kPartBoundary) return Status::Ok();
   const auto t0 = std::chrono::steady_clock::now();
   const BuildOptions& options = deferral_->options;
   boundary_ = extract_boundary(mesh_);
@@ -193,11 +196,9 @@ Status GwnModel::build_boundary() const {
 
 Status GwnModel::set_sheet_level(float level) {
   return guard_status("GwnModel::set_sheet_level", [&] {
-    if (!deferral_) return Status{StatusCode::kInvalidArgument, "GwnModel: empty (GwnModel::build makes one)"};
+    if (!deferral_) return Status{StatusCode::kInvalidArgument, kEmptyModel};
     std::lock_guard<std::mutex> lock(deferral_->mutex);
-    if (!(deferral_->built.load(std::memory_order_relaxed) & kPartBoundary)) {
-      if (Status s = build_boundary(); !s.ok()) return s;
-    }
+    if (Status s = build_boundary(); !s.ok()) return s;
     return set_sheet_level_locked(level);
   });
 }

@@ -116,7 +116,7 @@ class GwnModel {
   struct Deferral;  // what prepare needs: the options, the built bits, a mutex
 
   static Status build_unguarded(Mesh mesh, GwnModel& out, const BuildOptions& options);
-  // Under deferral_->mutex: the boundary part, then the sheets' first classification.
+  // Under deferral_->mutex: the boundary part (nothing when built), then a classification.
   Status build_boundary() const;
   Status set_sheet_level_locked(float level) const;
 
