@@ -184,11 +184,11 @@ class Comparison {
       for (size_t i = 0; i < ma.positions.size(); ++i)
         rows[3].add(glm::length(ma.positions[i] - mb.positions[i]) / sa.cell_size);
     }
-    // Counts and triangles exactly: the same mesh up to rounding has the same topology.
-    for (Row& r : rows) r.tolerance = r.quantity == "mesh vertex offset" ? 1e-5 : 0.0;
-    finish(rows, std::max<size_t>(1, ma.triangles.size()), t);
+    // Counts and triangles exactly, all or nothing: the same mesh up to rounding has the same
+    // topology (the 99.9% allowance is for items that rounding may flip, not for a mesh).
     for (size_t k = 0; k < 3; ++k)
-      if (rows[k].agree != rows[k].items) rows[k].agree = 0;  // all or nothing
+      if (rows[k].agree != rows[k].items) rows[k].agree = 0;
+    finish(rows, std::max<size_t>(1, ma.triangles.size()), t);
     return Status::Ok();
   }
 
@@ -211,11 +211,7 @@ class Comparison {
       const vec3 d = glm::abs(pa[i].colour - pb[i].colour);
       rows[2].add(std::max({d.x, d.y, d.z}));
     }
-    for (Row& r : rows) {  // one item a frame: frames per second
-      r.cpu_per_second = t.cpu > 0 ? 1.0 / t.cpu : 0.0;
-      r.gpu_per_second = t.gpu > 0 ? 1.0 / t.gpu : 0.0;
-      rows_.push_back(r);
-    }
+    finish(rows, 1, t);  // one item a frame: the rates are frames per second
     return Status::Ok();
   }
 
