@@ -5,7 +5,8 @@
 #   bash scripts/check.sh tsan         ThreadSanitizer build of the plugin tests and the core's
 #                                      thread tests (tests/threads), run
 #   bash scripts/check.sh downstream   install the Release build (build/), build and run
-#                                      tests/downstream against the installed package
+#                                      tests/downstream against the installed package, and
+#                                      import the installed Python package
 #   bash scripts/check.sh configs      the other build configurations: Embree and CUDA off (the
 #                                      tests and the programs whose code depends on Embree built,
 #                                      their Embree-dependent tests run), and the library alone (no
@@ -28,7 +29,7 @@ check_sanitize() {
   # -O1 -g1: on CI's 2 cores the build takes 9.7 min against 19 at RelWithDebInfo's -O2 -g, and the
   # suite runs as fast (4.3 min); line tables are all ASan's and UBSan's reports need.
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
-    -DGWNRT_SANITIZE=address,undefined -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
+    -DGWNRT_SANITIZE=address,undefined -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_WERROR=ON
   # The tests and every program they run (test_fuzz_inputs.cpp runs them all on hostile input).
   cmake --build build-asan --parallel "$jobs" --target gwnrt_tests gwnrt_thread_tests gwnrt_embree_tests \
     gwnrt_render_tests gwnrt-query gwnrt-render gwnrt-sdf-study gwnrt-mesh gwnrt-trace gwnrt-bench-trace \
@@ -44,7 +45,7 @@ check_tsan() {
   # TSan: docs/design.md §10). It matches frames inlined from TBB's headers, so
   # GWNRT_SANITIZE=thread adds -g whatever the build type (a Release build passes too).
   cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGWNRT_SANITIZE=thread \
-    -DGWNRT_WITH_CUDA=OFF -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_WERROR=ON
+    -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_WERROR=ON
   cmake --build build-tsan --parallel "$jobs" --target gwnrt_embree_tests gwnrt_thread_tests
   # history_size=7 (the most): a TBB worker reads a parallel_for's task_group_context on the
   # caller's stack, whose slot the caller reuses after the join TSan cannot see; with the default
@@ -65,6 +66,17 @@ check_downstream() {
   build-downstream/app/library_example data/bunny.obj
   [ -x build-downstream/app/embree_example ] && build-downstream/app/embree_example data/bunny_holes.obj
   [ -x build-downstream/app/cuda_example ] && build-downstream/app/cuda_example data/bunny.obj
+  # The Python package, when built: installed under the prefix and importable from there alone.
+  local module
+  module="$(find "$prefix" -name '_gwnrt*.so' -print -quit)"
+  if [ -n "$module" ]; then
+    local python
+    python="$(sed -n 's/^Python_EXECUTABLE:[A-Z]*=//p' build/CMakeCache.txt)"
+    (cd build-downstream && PYTHONPATH="$(dirname "$(dirname "$module")")" "$python" -c \
+      "import gwnrt, sys; m = gwnrt.load(sys.argv[1]); assert gwnrt.__file__.startswith(sys.argv[2]); \
+print('check downstream: installed gwnrt package:', m, 'w =', m.winding_number([[0, 5, 0]])[0])" \
+      "$PWD/../data/bunny.obj" "$prefix")
+  fi
   echo "check downstream: find_package(gwnrt) and every installed target linked"
 }
 

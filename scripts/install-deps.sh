@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages gwnrt builds against (skips apt when all are present).
+# Installs the Debian 12 packages gwnrt builds against (skips apt when all are present): the
+# Python module's too (pybind11, Python's headers; numpy, pytest, Dask for its tests).
 # --baselines adds what gwnrt-bench-mesh's OpenVDB column needs (OpenVDB, and Boost for its
 # headers): a benchmark's baseline only, left out of CI, where compiling OpenVDB's mesher into
 # each build configuration would cost minutes.
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
           libtbb-dev libglm-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
-          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev)
+          libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev
+          pybind11-dev python3-dev python3-numpy python3-pytest python3-dask python3-distributed)
 if [ "${1:-}" = "--baselines" ]; then
   packages+=(libopenvdb-dev libboost-dev libboost-iostreams-dev)
 fi

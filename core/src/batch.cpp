@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -15,17 +16,14 @@
 namespace gwnrt {
 namespace {
 
-// What the drivers share: `name` fails when in and out differ in size (naming what they hold),
-// else out[i] = fn(in[i]) over TBB chunks of `grain`, counting finished items into `progress`.
-// validate runs between the two checks, so a batch of the wrong size is reported as that first.
-// `order`, when given, is the sequence in which items are visited (the low 32 bits of each entry
-// are the item's index): results still land at their items' places.
-template <class In, class Out, class Validate, class Fn, class Order>
-Status parallel_map(const char* name, const char* items, const char* slots, std::span<const In> in, std::span<Out> out,
-                    size_t grain, std::atomic<size_t>* progress, Validate validate, Fn fn, Order make_order) {
-  if (in.size() != out.size())
-    return {StatusCode::kInvalidArgument, std::string(name) + ": " + std::to_string(in.size()) + " " + items + " but " +
-                                              std::to_string(out.size()) + " " + slots};
+// What the drivers share: store(i, fn(in[i])) over TBB chunks of `grain`, counting finished
+// items into `progress`, once validate() passes. `order`, when given, is the sequence in which
+// items are visited (the low 32 bits of each entry are the item's index): results still land at
+// their items' places.
+template <class In, class Validate, class Fn, class Store, class Order>
+Status parallel_map(const char* name, std::span<const In> in, size_t grain, std::atomic<size_t>* progress,
+                    Validate validate, Fn fn, Store store, Order make_order) {
+  using Out = std::invoke_result_t<Fn&, const In&>;
   if (Status s = validate(); !s.ok()) return s;
   return guard_status(name, [&] {
     const std::vector<uint64_t> order = make_order();
@@ -34,7 +32,7 @@ Status parallel_map(const char* name, const char* items, const char* slots, std:
     const size_t chunk = std::max<size_t>(1, std::min(grain, in.size() / 64));
     tbb::parallel_for(tbb::blocked_range<size_t>(0, in.size(), chunk), [&](const tbb::blocked_range<size_t>& range) {
       if (order.empty()) {
-        for (size_t k = range.begin(); k != range.end(); ++k) out[k] = fn(in[k]);
+        for (size_t k = range.begin(); k != range.end(); ++k) store(k, fn(in[k]));
       } else {
         // The order scatters the items over the batch: each block's inputs are gathered and its
         // results scattered in loops of their own, whose misses overlap, instead of one miss
@@ -47,7 +45,7 @@ Status parallel_map(const char* name, const char* items, const char* slots, std:
           const size_t m = std::min(kBlock, range.end() - b);
           for (size_t j = 0; j < m; ++j) block_in[j] = in[size_t(order[b + j] & 0xffffffffu)];
           for (size_t j = 0; j < m; ++j) block_out[j] = fn(block_in[j]);
-          for (size_t j = 0; j < m; ++j) out[size_t(order[b + j] & 0xffffffffu)] = block_out[j];
+          for (size_t j = 0; j < m; ++j) store(size_t(order[b + j] & 0xffffffffu), block_out[j]);
         }
       }
       if (progress) progress->fetch_add(range.size(), std::memory_order_relaxed);
@@ -146,11 +144,22 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
   return Status::Ok();
 }
 
-Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
-                       std::span<PointResult> results, std::atomic<size_t>* progress) {
+namespace {
+
+// `name` fails when a batch's inputs and outputs differ in size, naming what they hold.
+Status check_batch_sizes(const char* name, const char* items, size_t in, const char* slots, size_t out) {
+  if (in == out) return Status::Ok();
+  return {StatusCode::kInvalidArgument,
+          std::string(name) + ": " + std::to_string(in) + " " + items + " but " + std::to_string(out) + " " + slots};
+}
+
+// evaluate_points with store(i, result) for each point.
+template <class Store>
+Status evaluate_points_with(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
+                            std::atomic<size_t>* progress, Store store) {
   ModelView view;
   return parallel_map(
-      "evaluate_points", "points", "result slots", points, results, 256, progress,
+      "evaluate_points", points, 256, progress,
       [&] {
         if (Status s = validate_points(points); !s.ok()) return s;
         if (Status s = validate_request(request); !s.ok()) return s;
@@ -158,7 +167,7 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
         view = model.view();
         return validate_request(request, &view);
       },
-      [&](const vec3& x) { return evaluate_point(view, x, request); },
+      [&](const vec3& x) { return evaluate_point(view, x, request); }, store,
       [&] {
         // The boundary distance alone reads only ∂M's tree, which below kUnorderedSegments stays in
         // cache in any order: sorting cost more than the queries (1M points, 2 cores: the closed
@@ -167,6 +176,22 @@ Status evaluate_points(const GwnModel& model, std::span<const vec3> points, cons
           return std::vector<uint64_t>();
         return spatial_order(view.bounds, points);
       });
+}
+
+}  // namespace
+
+Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
+                       std::span<PointResult> results, std::atomic<size_t>* progress) {
+  if (Status s = check_batch_sizes("evaluate_points", "points", points.size(), "result slots", results.size()); !s.ok())
+    return s;
+  return evaluate_points_with(model, points, request, progress,
+                              [&](size_t i, const PointResult& r) { results[i] = r; });
+}
+
+Status evaluate_points_to_columns(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
+                                  const PointColumns& columns, std::atomic<size_t>* progress) {
+  return evaluate_points_with(model, points, request, progress,
+                              [&](size_t i, const PointResult& r) { store_point_result(columns, i, r); });
 }
 
 Status validate_trace_options(const TraceOptions& options) {
@@ -184,17 +209,19 @@ Status validate_trace_options(const TraceOptions& options) {
 
 Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceOptions& options, std::span<RayHit> hits,
                   std::atomic<size_t>* progress) {
+  if (Status s = check_batch_sizes("trace_rays", "rays", rays.size(), "hit slots", hits.size()); !s.ok()) return s;
   ModelView view;
   // Rays cost far more than points (and vary more), so chunks are smaller.
   return parallel_map(
-      "trace_rays", "rays", "hit slots", rays, hits, 64, progress,
+      "trace_rays", rays, 64, progress,
       [&] {
         if (Status s = validate_trace_options(options); !s.ok()) return s;
         if (Status s = model.prepare(kPartBoundary); !s.ok()) return s;
         view = model.view();
         return validate_trace_view(view);
       },
-      [&](const Ray& ray) { return trace_surface(view, ray, options); }, [] { return std::vector<uint64_t>(); });
+      [&](const Ray& ray) { return trace_surface(view, ray, options); },
+      [&](size_t i, const RayHit& hit) { hits[i] = hit; }, [] { return std::vector<uint64_t>(); });
 }
 
 }  // namespace gwnrt

@@ -6,6 +6,7 @@
 #include <span>
 
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/sdf/point_columns.h"
 #include "gwnrt/sdf/point_query.h"
 #include "gwnrt/trace/surface_trace.h"
 
@@ -19,6 +20,11 @@ inline ModelView model_view(const GwnModel& model) { return model.view(); }
 // refuses, a bad order or a beta <= 0.
 Status evaluate_points(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, std::atomic<size_t>* progress = nullptr);
+
+// The same, each result written into the given columns (sdf/point_columns.h), which hold
+// points.size() rows each: no PointResult array in between.
+Status evaluate_points_to_columns(const GwnModel& model, std::span<const vec3> points, const QueryRequest& request,
+                                  const PointColumns& columns, std::atomic<size_t>* progress = nullptr);
 
 // The query points the drivers serve: finite, every coordinate within +-kMaxQueryCoordinate
 // (beyond, the squared distances to M overflow float: the distances came out NaN from 1e19 and

@@ -1,0 +1,247 @@
+// The native part of the Python module (gwnrt._gwnrt): the model, its I/O, and what the other
+// files share. The Python-facing API (named results, keyword defaults, objects with .vertices and
+// .faces) is python/gwnrt/__init__.py.
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "gwnrt/geometry/model.h"
+#include "gwnrt/io/mesh_io.h"
+#include "python_model.h"
+
+namespace gwnrt::python {
+
+void raise_status(const Status& status) {
+  switch (status.code()) {
+    case StatusCode::kInvalidArgument:
+    case StatusCode::kParseError:
+    case StatusCode::kInvalidMesh:
+      throw py::value_error(status.message());
+    case StatusCode::kIoError:
+      PyErr_SetString(PyExc_OSError, status.message().c_str());
+      throw py::error_already_set();
+    case StatusCode::kOutOfMemory:
+      PyErr_SetString(PyExc_MemoryError, status.message().c_str());
+      throw py::error_already_set();
+    default:
+      throw std::runtime_error(status.message());
+  }
+}
+
+namespace {
+
+std::string shape_text(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+std::string rows_text(py::ssize_t width) { return width == 1 ? "(k,)" : "(k, " + std::to_string(width) + ")"; }
+
+}  // namespace
+
+FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width) {
+  py::array any = py::array::ensure(obj);
+  if (!any) throw py::value_error(std::string(name) + " must be an array of numbers of shape " + rows_text(width));
+  const char kind = any.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u' && kind != 'b')
+    throw py::value_error(std::string(name) + " must hold real numbers, got dtype " +
+                          std::string(py::str(any.dtype())));
+  if (any.size() == 0) return FloatArray(width == 1 ? std::vector<py::ssize_t>{0} : std::vector<py::ssize_t>{0, width});
+  const bool shaped = width == 1 ? any.ndim() == 1 : any.ndim() == 2 && any.shape(1) == width;
+  if (!shaped)
+    throw py::value_error(std::string(name) + " must have shape " + rows_text(width) + ", got " + shape_text(any));
+  return FloatArray::ensure(any);
+}
+
+bool use_cuda(const std::string& device) {
+  if (device == "cpu") return false;
+  if (device != "cuda" && device != "auto")
+    throw py::value_error("device must be 'cpu', 'cuda' or 'auto', got '" + device + "'");
+#if defined(GWNRT_HAVE_CUDA)
+  std::string why;
+  const bool usable = cuda::device_available(&why);
+#else
+  const bool usable = false;
+  const std::string why = "this gwnrt module was built without the CUDA backend";
+#endif
+  if (device == "cuda" && !usable) throw std::runtime_error("device='cuda': " + why);
+  return usable;
+}
+
+WindingMethod winding_method_named(const std::string& name) {
+  for (uint32_t m = 0; m < kWindingMethodCount; ++m)
+    if (name == winding_method_name(WindingMethod(m))) return WindingMethod(m);
+  throw py::value_error("method must be 'auto', 'crossing', 'taylor' or 'brute', got '" + name + "'");
+}
+
+std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
+  py::array any = py::array::ensure(obj);
+  if (!any) throw py::value_error("faces must be an integer array of shape (m, 3)");
+  if (any.size() == 0) return {};
+  if (any.dtype().kind() != 'i' && any.dtype().kind() != 'u')
+    throw py::value_error("faces must be an integer array of shape (m, 3), got dtype " +
+                          std::string(py::str(any.dtype())));
+  if (any.ndim() != 2 || any.shape(1) != 3)
+    throw py::value_error("faces must have shape (m, 3), got " + shape_text(any));
+  auto indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
+  std::vector<uvec3> faces(size_t(indices.shape(0)));
+  const int64_t* v = indices.data();
+  for (size_t f = 0; f < faces.size(); ++f) {
+    for (int c = 0; c < 3; ++c) {
+      const int64_t index = v[3 * f + c];
+      if (index < 0 || uint64_t(index) >= vertex_count)
+        throw py::value_error("face " + std::to_string(f) + " has vertex index " + std::to_string(index) +
+                              ", outside [0, " + std::to_string(vertex_count) + ")");
+      faces[f][c] = uint32_t(index);
+    }
+  }
+  return faces;
+}
+
+float default_level(const PythonModel& p) {
+  std::shared_lock lock(p.level_mutex);
+  return std::isnan(p.sheet_level) ? 0.5f : p.sheet_level;
+}
+
+#if defined(GWNRT_HAVE_CUDA)
+Status PythonModel::device_model(const cuda::DeviceModel*& out) const {
+  std::lock_guard<std::mutex> lock(device_mutex);
+  if (!device) {
+    if (Status s = model.prepare(kPartTriangles | kPartBoundary | kPartSheets); !s.ok()) return s;
+    auto uploaded = std::make_unique<cuda::DeviceModel>();
+    if (Status s = cuda::DeviceModel::upload(model, *uploaded); !s.ok()) return s;
+    device = std::move(uploaded);
+  }
+  out = device.get();
+  return Status::Ok();
+}
+#endif
+
+namespace {
+
+BuildOptions build_options(bool classify_sheets, float level, const std::string& sheet_method) {
+  BuildOptions options;
+  options.classify_sheets = classify_sheets;
+  options.sheet_level = level;
+  options.sheet_method = winding_method_named(sheet_method);
+  if (options.sheet_method == WindingMethod::kBrute)
+    throw py::value_error("sheet_method must be 'auto', 'crossing' or 'taylor' (brute would sum n^2 terms)");
+  if (!std::isfinite(level)) throw py::value_error("level must be a finite number");
+  // The tree now, the boundary, cone and sheets on first need (a distance query never pays for them).
+  options.defer_parts = true;
+  return options;
+}
+
+std::unique_ptr<PythonModel> build_model(Mesh mesh, const BuildOptions& options, std::optional<int> threads) {
+  auto out = std::make_unique<PythonModel>();
+  if (options.classify_sheets) out->sheet_level = options.sheet_level;
+  check(run_released(threads, [&] { return GwnModel::build(std::move(mesh), out->model, options); }));
+  return out;
+}
+
+py::array vec3_copy(std::span<const vec3> v) {
+  auto out = new_rows<float>(v.size(), {3});
+  if (!v.empty()) std::memcpy(out.mutable_data(), v.data(), v.size() * sizeof(vec3));
+  return out;
+}
+
+}  // namespace
+
+void bind_model(py::module_& m) {
+  py::class_<PythonModel>(m, "Model")
+      .def(py::init([](const py::handle& vertices, const py::handle& faces, bool classify_sheets, float level,
+                       const std::string& sheet_method, std::optional<int> threads) {
+             const BuildOptions options = build_options(classify_sheets, level, sheet_method);
+             const FloatArray positions = float_rows(vertices, "vertices", 3);
+             Mesh mesh;
+             mesh.positions.assign(as_vec3(positions).begin(), as_vec3(positions).end());
+             mesh.triangles = face_rows(faces, mesh.positions.size());
+             return build_model(std::move(mesh), options, threads);
+           }),
+           py::arg("vertices"), py::arg("faces"), py::kw_only(), py::arg("classify_sheets") = true,
+           py::arg("level") = 0.5f, py::arg("sheet_method") = "auto", py::arg("threads") = py::none())
+      .def_static(
+          "load",
+          [](const std::string& path, bool classify_sheets, float level, const std::string& sheet_method,
+             std::optional<int> threads) {
+            const BuildOptions options = build_options(classify_sheets, level, sheet_method);
+            Mesh mesh;
+            MeshLoadReport report;
+            check(run_released(std::nullopt, [&] { return load_mesh(path, mesh, &report); }));
+            std::string notes = report.warnings;
+            if (!report.attributes_dropped.empty())
+              notes += (notes.empty() ? "" : "; ") + std::string("dropped: ") + report.attributes_dropped;
+            return py::make_tuple(build_model(std::move(mesh), options, threads), notes);
+          },
+          py::arg("path"), py::kw_only(), py::arg("classify_sheets") = true, py::arg("level") = 0.5f,
+          py::arg("sheet_method") = "auto", py::arg("threads") = py::none())
+      .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model.mesh().positions.size(); })
+      .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model.mesh().triangles.size(); })
+      .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model.mesh().positions); })
+      .def_property_readonly("faces",
+                             [](const PythonModel& p) {
+                               const auto& t = p.model.mesh().triangles;
+                               auto out = new_rows<int64_t>(t.size(), {3});
+                               int64_t* o = out.mutable_data();
+                               for (size_t f = 0; f < t.size(); ++f)
+                                 for (int c = 0; c < 3; ++c) o[3 * f + c] = t[f][c];
+                               return out;
+                             })
+      .def_property_readonly("bounds",
+                             [](const PythonModel& p) {
+                               const vec3 corners[2] = {p.model.bounds().lo, p.model.bounds().hi};
+                               return vec3_copy(corners);
+                             })
+      .def_property_readonly("sheet_level",
+                             [](const PythonModel& p) -> std::optional<float> {
+                               std::shared_lock lock(p.level_mutex);
+                               if (std::isnan(p.sheet_level)) return std::nullopt;
+                               return p.sheet_level;
+                             })
+      .def_property_readonly("boundary_segment_count",
+                             [](const PythonModel& p) {
+                               check(run_released(std::nullopt, [&] { return p.model.prepare(kPartBoundary); }));
+                               return p.model.boundary_tree().view().segment_count;
+                             })
+      .def(
+          "set_sheet_level",
+          [](PythonModel& p, float level) {
+            check(run_released(std::nullopt, [&] {
+              std::unique_lock lock(p.level_mutex);
+#if defined(GWNRT_HAVE_CUDA)
+              std::lock_guard<std::mutex> device_lock(p.device_mutex);
+              p.device.reset();  // uploaded again with the new sheets when next asked
+#endif
+              Status s = p.model.set_sheet_level(level);
+              if (s.ok()) p.sheet_level = level;
+              return s;
+            }));
+          },
+          py::arg("level"));
+}
+
+}  // namespace gwnrt::python
+
+PYBIND11_MODULE(_gwnrt, m) {
+  namespace py = pybind11;
+  m.doc() = "gwnrt's native module; use the gwnrt package";
+  gwnrt::python::bind_model(m);
+  gwnrt::python::bind_queries(m);
+  gwnrt::python::bind_meshing(m);
+  m.def("device_available", []() -> py::tuple {
+#if defined(GWNRT_HAVE_CUDA)
+    std::string why;
+    const bool usable = gwnrt::cuda::device_available(&why);
+    return py::make_tuple(usable, why);
+#else
+    return py::make_tuple(false, std::string("this gwnrt module was built without the CUDA backend"));
+#endif
+  });
+  m.attr("has_cuda_backend") =
+#if defined(GWNRT_HAVE_CUDA)
+      true;
+#else
+      false;
+#endif
+}

@@ -1,0 +1,48 @@
+// The model the Python module holds: a GwnModel, the lock that keeps set_sheet_level apart from
+// running batches (GwnModel::set_sheet_level is not thread-safe with queries, and Python threads
+// may call both), and, with the CUDA backend, the device copy made on the first device="cuda" call.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <string>
+
+#include "gwnrt/geometry/model.h"
+#include "numpy_arrays.h"
+
+#if defined(GWNRT_HAVE_CUDA)
+#include "gwnrt/cuda.h"
+#endif
+
+namespace gwnrt::python {
+
+struct PythonModel {
+  GwnModel model;
+  // The level the sheets are classified for, or are to be on first need (the model defers them);
+  // NaN without sheets. Under level_mutex, which set_sheet_level holds alone.
+  float sheet_level = __builtin_nanf("");
+  mutable std::shared_mutex level_mutex;
+#if defined(GWNRT_HAVE_CUDA)
+  mutable std::mutex device_mutex;
+  mutable std::unique_ptr<cuda::DeviceModel> device;
+  // The device copy, uploaded once (every part built first); call without the GIL.
+  Status device_model(const cuda::DeviceModel*& out) const;
+#endif
+};
+
+// Whether `device` ("cpu", "cuda" or "auto") runs on the GPU; ValueError for another name,
+// RuntimeError for "cuda" without a usable GPU (saying why). "auto" takes the GPU when usable.
+bool use_cuda(const std::string& device);
+
+// The level a request without one takes: the sheets', else 1/2.
+float default_level(const PythonModel& p);
+
+// WindingMethod by winding_method_name; ValueError for another name.
+WindingMethod winding_method_named(const std::string& name);
+
+void bind_model(py::module_& m);
+void bind_queries(py::module_& m);
+void bind_meshing(py::module_& m);
+
+}  // namespace gwnrt::python
