@@ -182,6 +182,8 @@ class Model:
         sheet_distance, projection, harnack_bound. method: how w, grad w and H_w are evaluated
         (auto, crossing: exact, taylor: the multipole tree at `order` and `beta`, brute: the
         double sum). level: None takes the level the sheets were classified for."""
+        if isinstance(fields, str):
+            fields = [fields]
         return _gwnrt.query(self._native, points, list(fields), method=method, order=order, beta=beta,
                             level=level, newton_iterations=max_iterations, newton_tolerance=tolerance,
                             threads=threads, device=device)
@@ -300,7 +302,7 @@ def _per_ray(x, k, name):
 
 def load(path, *, classify_sheets: bool = True, level: float = 0.5, sheet_method: str = "auto",
          threads: Optional[int] = None) -> Model:
-    """A Model from an OBJ, PLY or STL file (what the file had that gwnrt does not read is
+    """A Model from an OBJ or PLY file (what the file had that gwnrt does not read is
     reported as a warning)."""
     native, notes = _gwnrt.Model.load(os.fspath(path), classify_sheets=classify_sheets, level=level,
                                       sheet_method=sheet_method, threads=threads)
@@ -309,17 +311,21 @@ def load(path, *, classify_sheets: bool = True, level: float = 0.5, sheet_method
     return Model._from_native(native)
 
 
-def write_mesh(path, mesh, faces=None, *, normals=None, uvs=None, colors=None, format: str = "auto",
-               soup: bool = False) -> None:
-    """Writes a mesh to binary PLY or OBJ (by the extension, or format='ply'/'obj'): a MeshResult,
-    or vertices and faces arrays with optional per-vertex normals, uvs and colours."""
+def write_mesh(path, mesh, faces=None, *, normals=None, uvs=None, colors=None, source_triangles=None,
+               source_barycentrics=None, format: str = "auto", soup: bool = False) -> None:
+    """Writes a mesh to binary PLY or OBJ (by the extension, or format='ply'/'obj'): a MeshResult
+    (every array it has), or vertices and faces arrays with optional per-vertex normals, uvs,
+    colours and source triangles and barycentrics (PLY only keeps the last two)."""
     if faces is None:
         if isinstance(mesh, MeshResult):
             normals = mesh.normals if normals is None else normals
             uvs = mesh.uvs if uvs is None else uvs
             colors = mesh.colors if colors is None else colors
+            source_triangles = mesh.source_triangles if source_triangles is None else source_triangles
+            source_barycentrics = mesh.source_barycentrics if source_barycentrics is None else source_barycentrics
         mesh, faces = _mesh_arrays(mesh)
-    _gwnrt.write_mesh(os.fspath(path), mesh, faces, normals=normals, uvs=uvs, colors=colors, format=format,
+    _gwnrt.write_mesh(os.fspath(path), mesh, faces, normals=normals, uvs=uvs, colors=colors,
+                      source_triangles=source_triangles, source_barycentrics=source_barycentrics, format=format,
                       soup=soup)
 
 

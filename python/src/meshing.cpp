@@ -63,12 +63,15 @@ py::dict mesh_dict(SurfaceMesh&& mesh) {
   return d;
 }
 
-py::dict extract(const PythonModel& p, uint32_t resolution, float cell_size, const std::string& method,
+py::dict extract(const PythonModel& p, int64_t resolution, float cell_size, const std::string& method,
                  std::optional<float> level, float smooth_angle, bool soup, const std::vector<std::string>& attributes,
                  const std::string& winding_method, int order, float beta, uint64_t memory_budget,
                  std::optional<int> threads, const std::string& device) {
   MeshingOptions options;
-  options.resolution = resolution;
+  if (resolution < 1 || resolution > int64_t(UINT32_MAX))
+    throw py::value_error("resolution must be at least 1 (cells along the box's longest side), got " +
+                          std::to_string(resolution));
+  options.resolution = uint32_t(resolution);
   options.cell_size = cell_size;
   if (method == "dc")
     options.method = MeshingMethod::kDualContouring;
@@ -87,8 +90,8 @@ py::dict extract(const PythonModel& p, uint32_t resolution, float cell_size, con
   SurfaceMesh mesh;
   MeshingStats stats;
   check(run_released(threads, [&] {
-    options.level = level ? *level : default_level(p);
     std::shared_lock lock(p.level_mutex);
+    options.level = level_or_default(p, level);
 #if defined(GWNRT_HAVE_CUDA)
     if (gpu) {
       const cuda::DeviceModel* device_model = nullptr;
@@ -113,19 +116,37 @@ void rows_into(const py::handle& obj, const char* name, py::ssize_t width, std::
   if (!out.empty()) std::memcpy(out.data(), rows.data(), out.size() * sizeof(V));
 }
 
-SurfaceMesh surface_mesh(const py::handle& vertices, const py::handle& faces, const py::handle& normals,
-                         const py::handle& uvs, const py::handle& colors) {
+SurfaceMesh surface_mesh(const py::handle& vertices, const py::handle& faces, const py::handle& normals = py::none(),
+                         const py::handle& uvs = py::none(), const py::handle& colors = py::none(),
+                         const py::handle& source_triangles = py::none(),
+                         const py::handle& source_barycentrics = py::none()) {
   SurfaceMesh mesh;
   rows_into(vertices, "vertices", 3, mesh.positions);
   rows_into(normals, "normals", 3, mesh.normals);
   rows_into(uvs, "uvs", 2, mesh.uvs);
   rows_into(colors, "colors", 4, mesh.colors);
+  rows_into(source_barycentrics, "source_barycentrics", 2, mesh.source_barycentrics);
+  if (!source_triangles.is_none()) {
+    py::array any = py::array::ensure(source_triangles);
+    if (!any || any.ndim() != 1 || (any.size() && any.dtype().kind() != 'i' && any.dtype().kind() != 'u'))
+      throw py::value_error("source_triangles must be an integer array of shape (n,)");
+    auto indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
+    mesh.source_triangles.resize(size_t(indices.shape(0)));
+    for (size_t i = 0; i < mesh.source_triangles.size(); ++i) {
+      const int64_t index = indices.data()[i];
+      if (index < 0 || index > int64_t(UINT32_MAX))
+        throw py::value_error("source_triangles[" + std::to_string(i) + "] = " + std::to_string(index) +
+                              " is not a triangle index");
+      mesh.source_triangles[i] = uint32_t(index);
+    }
+  }
   mesh.triangles = face_rows(faces, mesh.positions.size());
   return mesh;
 }
 
 void write_mesh(const std::string& path, const py::handle& vertices, const py::handle& faces, const py::handle& normals,
-                const py::handle& uvs, const py::handle& colors, const std::string& format, bool soup) {
+                const py::handle& uvs, const py::handle& colors, const py::handle& source_triangles,
+                const py::handle& source_barycentrics, const std::string& format, bool soup) {
   MeshWriteOptions options;
   if (format == "auto")
     options.format = MeshFileFormat::kAuto;
@@ -136,12 +157,12 @@ void write_mesh(const std::string& path, const py::handle& vertices, const py::h
   else
     throw py::value_error("format must be 'auto', 'ply' or 'obj', got '" + format + "'");
   options.soup = soup;
-  const SurfaceMesh mesh = surface_mesh(vertices, faces, normals, uvs, colors);
+  const SurfaceMesh mesh = surface_mesh(vertices, faces, normals, uvs, colors, source_triangles, source_barycentrics);
   check(run_released(std::nullopt, [&] { return write_surface_mesh(path, mesh, options); }));
 }
 
 py::dict topology(const py::handle& vertices, const py::handle& faces, bool weld) {
-  const SurfaceMesh mesh = surface_mesh(vertices, faces, py::none(), py::none(), py::none());
+  const SurfaceMesh mesh = surface_mesh(vertices, faces);
   MeshTopology t;
   check(run_released(std::nullopt, [&] { return mesh_topology(mesh, t, weld); }));
   py::dict d;
@@ -161,13 +182,14 @@ py::dict topology(const py::handle& vertices, const py::handle& faces, bool weld
 }  // namespace
 
 void bind_meshing(py::module_& m) {
-  m.def("extract_surface", &extract, py::arg("model"), py::arg("resolution") = 256u, py::arg("cell_size") = 0.0f,
-        py::arg("method") = "dc", py::arg("level") = py::none(), py::arg("smooth_angle") = 30.0f,
-        py::arg("soup") = false, py::arg("attributes") = std::vector<std::string>{}, py::arg("winding_method") = "auto",
-        py::arg("order") = 2, py::arg("beta") = 2.0f, py::arg("memory_budget") = uint64_t(8) << 30,
-        py::arg("threads") = py::none(), py::arg("device") = "cpu");
+  m.def("extract_surface", &extract, py::arg("model"), py::arg("resolution") = int64_t(256),
+        py::arg("cell_size") = 0.0f, py::arg("method") = "dc", py::arg("level") = py::none(),
+        py::arg("smooth_angle") = 30.0f, py::arg("soup") = false, py::arg("attributes") = std::vector<std::string>{},
+        py::arg("winding_method") = "auto", py::arg("order") = 2, py::arg("beta") = 2.0f,
+        py::arg("memory_budget") = uint64_t(8) << 30, py::arg("threads") = py::none(), py::arg("device") = "cpu");
   m.def("write_mesh", &write_mesh, py::arg("path"), py::arg("vertices"), py::arg("faces"),
         py::arg("normals") = py::none(), py::arg("uvs") = py::none(), py::arg("colors") = py::none(),
+        py::arg("source_triangles") = py::none(), py::arg("source_barycentrics") = py::none(),
         py::arg("format") = "auto", py::arg("soup") = false);
   m.def("mesh_topology", &topology, py::arg("vertices"), py::arg("faces"), py::arg("weld") = false);
 }

@@ -47,7 +47,9 @@ FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width
   if (kind != 'f' && kind != 'i' && kind != 'u' && kind != 'b')
     throw py::value_error(std::string(name) + " must hold real numbers, got dtype " +
                           std::string(py::str(any.dtype())));
-  if (any.size() == 0) return FloatArray(width == 1 ? std::vector<py::ssize_t>{0} : std::vector<py::ssize_t>{0, width});
+  // No rows: (0, width), or (0,) as an empty list converts.
+  if (any.ndim() == 1 && any.shape(0) == 0)
+    return FloatArray(width == 1 ? std::vector<py::ssize_t>{0} : std::vector<py::ssize_t>{0, width});
   const bool shaped = width == 1 ? any.ndim() == 1 : any.ndim() == 2 && any.shape(1) == width;
   if (!shaped)
     throw py::value_error(std::string(name) + " must have shape " + rows_text(width) + ", got " + shape_text(any));
@@ -78,29 +80,33 @@ WindingMethod winding_method_named(const std::string& name) {
 std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
   py::array any = py::array::ensure(obj);
   if (!any) throw py::value_error("faces must be an integer array of shape (m, 3)");
-  if (any.size() == 0) return {};
+  if (any.ndim() == 1 && any.shape(0) == 0) return {};
   if (any.dtype().kind() != 'i' && any.dtype().kind() != 'u')
     throw py::value_error("faces must be an integer array of shape (m, 3), got dtype " +
                           std::string(py::str(any.dtype())));
   if (any.ndim() != 2 || any.shape(1) != 3)
     throw py::value_error("faces must have shape (m, 3), got " + shape_text(any));
-  auto indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
-  std::vector<uvec3> faces(size_t(indices.shape(0)));
-  const int64_t* v = indices.data();
-  for (size_t f = 0; f < faces.size(); ++f) {
-    for (int c = 0; c < 3; ++c) {
-      const int64_t index = v[3 * f + c];
-      if (index < 0 || uint64_t(index) >= vertex_count)
-        throw py::value_error("face " + std::to_string(f) + " has vertex index " + std::to_string(index) +
-                              ", outside [0, " + std::to_string(vertex_count) + ")");
-      faces[f][c] = uint32_t(index);
+  // Signed and unsigned indices each in a 64-bit type of their own kind, so that neither wraps.
+  const auto convert = [&]<class Index>(Index) {
+    auto indices = py::array_t<Index, py::array::c_style | py::array::forcecast>::ensure(any);
+    std::vector<uvec3> faces(size_t(indices.shape(0)));
+    const Index* v = indices.data();
+    for (size_t f = 0; f < faces.size(); ++f) {
+      for (int c = 0; c < 3; ++c) {
+        const Index index = v[3 * f + c];
+        if (index < 0 || uint64_t(index) >= vertex_count)
+          throw py::value_error("face " + std::to_string(f) + " has vertex index " + std::to_string(index) +
+                                ", outside [0, " + std::to_string(vertex_count) + ")");
+        faces[f][c] = uint32_t(index);
+      }
     }
-  }
-  return faces;
+    return faces;
+  };
+  return any.dtype().kind() == 'u' ? convert(uint64_t()) : convert(int64_t());
 }
 
-float default_level(const PythonModel& p) {
-  std::shared_lock lock(p.level_mutex);
+float level_or_default(const PythonModel& p, std::optional<float> level) {
+  if (level) return *level;
   return std::isnan(p.sheet_level) ? 0.5f : p.sheet_level;
 }
 

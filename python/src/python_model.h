@@ -35,8 +35,9 @@ struct PythonModel {
 // RuntimeError for "cuda" without a usable GPU (saying why). "auto" takes the GPU when usable.
 bool use_cuda(const std::string& device);
 
-// The level a request without one takes: the sheets', else 1/2.
-float default_level(const PythonModel& p);
+// `level`, or for a request without one the sheets' level, else 1/2. Call holding level_mutex
+// (shared) for as long as the level is used.
+float level_or_default(const PythonModel& p, std::optional<float> level);
 
 // WindingMethod by winding_method_name; ValueError for another name.
 WindingMethod winding_method_named(const std::string& name);

@@ -118,23 +118,24 @@ py::list query_columns(const std::vector<std::string>& names) {
   return out;
 }
 
-QueryRequest query_request(const PythonModel& p, const std::vector<std::string>& fields, const std::string& method,
-                           int order, float beta, std::optional<float> level, uint32_t newton_iterations,
-                           float newton_tolerance) {
+// The request but its level, which evaluate_on sets under the level lock (a default read
+// before it could be stale by the time the batch runs).
+QueryRequest query_request(const std::vector<std::string>& fields, const std::string& method, int order, float beta,
+                           uint32_t newton_iterations, float newton_tolerance) {
   QueryRequest request;
   request.fields = fields_named(fields);
   request.method = winding_method_named(method);
   request.taylor.order = order;
   request.taylor.beta = beta;
-  request.level = level ? *level : default_level(p);
   request.newton.max_iterations = newton_iterations;
   request.newton.tolerance = newton_tolerance;
   return request;
 }
 
-Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points, const QueryRequest& request,
-                   const PointColumns& columns) {
+Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points, QueryRequest request,
+                   std::optional<float> level, const PointColumns& columns) {
   std::shared_lock lock(p.level_mutex);
+  request.level = level_or_default(p, level);
   if (!gpu) return evaluate_points_to_columns(p.model, points, request, columns);
 #if defined(GWNRT_HAVE_CUDA)
   return guard_status("evaluate_points (cuda)", [&] {
@@ -155,13 +156,12 @@ Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points,
 py::dict query(const PythonModel& p, const py::handle& points_obj, const std::vector<std::string>& fields,
                const std::string& method, int order, float beta, std::optional<float> level, uint32_t newton_iterations,
                float newton_tolerance, std::optional<int> threads, const std::string& device) {
-  const QueryRequest request =
-      query_request(p, fields, method, order, beta, level, newton_iterations, newton_tolerance);
+  const QueryRequest request = query_request(fields, method, order, beta, newton_iterations, newton_tolerance);
   const bool gpu = use_cuda(device);
   const FloatArray points = float_rows(points_obj, "points", 3);
   py::dict out;
   const PointColumns columns = point_columns(request.fields, size_t(points.shape(0)), out);
-  check(run_released(threads, [&] { return evaluate_on(p, gpu, as_vec3(points), request, columns); }));
+  check(run_released(threads, [&] { return evaluate_on(p, gpu, as_vec3(points), request, level, columns); }));
   return out;
 }
 
@@ -250,7 +250,9 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
 std::vector<double> cxx_batch_seconds(const PythonModel& p, const py::handle& points_obj,
                                       const std::vector<std::string>& fields, const std::string& method, int order,
                                       float beta, int repeats, std::optional<int> threads) {
-  const QueryRequest request = query_request(p, fields, method, order, beta, std::nullopt, 32, 1e-4f);
+  QueryRequest request = query_request(fields, method, order, beta, 32, 1e-4f);
+  std::shared_lock lock(p.level_mutex);  // set_sheet_level waits for the benchmark
+  request.level = level_or_default(p, std::nullopt);
   const FloatArray points = float_rows(points_obj, "points", 3);
   std::vector<double> seconds;
   std::vector<PointResult> results(size_t(points.shape(0)));
