@@ -3,6 +3,7 @@ threads (Python threads sharing a model, the threads= argument), memory (no copy
 C-contiguous points) and the device= argument. The values themselves are checked against numpy
 references in test_queries.py, test_trace.py and test_meshing_py.py."""
 
+import contextlib
 import gc
 import re
 import threading
@@ -342,6 +343,26 @@ def test_python_threads_share_a_model(bunny_holes):
     assert mismatches == []
 
 
+@contextlib.contextmanager
+def levels_toggled(model):
+    """A thread classifying the model's sheets for 0.3 and 0.5 in turn while the block runs."""
+    stop = threading.Event()
+
+    def toggle():
+        k = 0
+        while not stop.is_set():
+            model.set_sheet_level(0.3 if k % 2 == 0 else 0.5)
+            k += 1
+
+    toggler = threading.Thread(target=toggle)
+    toggler.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        toggler.join(60)
+
+
 def test_set_sheet_level_while_querying(data_dir):
     model = gwnrt.load(f"{data_dir}/bunny_holes.obj")
     points = [ref.points_around(model.vertices, 500, 200 + i, pad=0.2).astype(np.float32) for i in range(7)]
@@ -351,14 +372,7 @@ def test_set_sheet_level_while_querying(data_dir):
         model.set_sheet_level(level)
         sdf_expected[level] = [model.signed_distance(p).sdf for p in points]
     assert not np.array_equal(sdf_expected[0.3][0], sdf_expected[0.5][0])
-    stop = threading.Event()
     results = {"sdf": 0}
-
-    def toggle():
-        k = 0
-        while not stop.is_set():
-            model.set_sheet_level(0.3 if k % 2 == 0 else 0.5)
-            k += 1
 
     def query(i):
         for _ in range(30):
@@ -368,13 +382,8 @@ def test_set_sheet_level_while_querying(data_dir):
             assert np.array_equal(sdf, sdf_expected[0.3][i]) or np.array_equal(sdf, sdf_expected[0.5][i])
             results["sdf"] += 1
 
-    toggler = threading.Thread(target=toggle)
-    toggler.start()
-    try:
+    with levels_toggled(model):
         errors = run_threads(7, query)
-    finally:
-        stop.set()
-        toggler.join(60)
     assert errors == []
     # The level is kept as a float32: 0.3 reads back as 0.30000001192092896.
     assert results["sdf"] > 0 and model.sheet_level in (float(np.float32(0.3)), 0.5)
@@ -383,26 +392,14 @@ def test_set_sheet_level_while_querying(data_dir):
 def test_signed_distance_default_level_never_mismatches(data_dir):
     model = gwnrt.load(f"{data_dir}/bunny_holes.obj")
     points = ref.points_around(model.vertices, 4, 300, pad=0.2).astype(np.float32)
-    stop = threading.Event()
     deadline = time.monotonic() + 2.0
 
-    def toggle():
-        k = 0
-        while not stop.is_set():
-            model.set_sheet_level(0.3 if k % 2 == 0 else 0.5)
-            k += 1
-
     def query(i):
-        while not stop.is_set() and time.monotonic() < deadline:
+        while time.monotonic() < deadline:
             model.signed_distance(points)  # level None: whatever the sheets are classified for
 
-    toggler = threading.Thread(target=toggle)
-    toggler.start()
-    try:
+    with levels_toggled(model):
         errors = run_threads(4, query)
-    finally:
-        stop.set()
-        toggler.join(60)
     assert errors == [], errors[0]
 
 
