@@ -95,7 +95,8 @@ def _model_for(source: ModelSource, threads: Optional[int]) -> gwnrt.Model:
     with entry[0]:
         if entry[1] is None:
             entry[1] = source.build(threads)
-            _stats["models_built"] += 1
+            with _models_lock:
+                _stats["models_built"] += 1
     return entry[1]
 
 
@@ -110,8 +111,9 @@ def _query_chunk(points, source, fields, options, layout):
     threads = options.pop("threads", None) or _worker_threads()
     model = _model_for(source, threads)
     columns = model.query(points, fields, threads=threads, **options)
-    _stats["chunks"] += 1
-    _stats["points"] += len(points)
+    with _models_lock:  # a worker may run chunks on several threads
+        _stats["chunks"] += 1
+        _stats["points"] += len(points)
     if len(layout) == 1:
         return columns[layout[0][0]]
     packed = np.empty(len(points), dtype=np.dtype(layout))
