@@ -88,6 +88,7 @@ check_configs() {
   cmake --build build-noembree --parallel "$jobs" --target gwnrt_tests gwnrt-bench-trace
   ctest --test-dir build-noembree --output-on-failure --parallel "$jobs" -R '^TraceWatertight'
   cmake -S . -B build-library -G Ninja -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_BUILD_TESTS=OFF -DGWNRT_WITH_CUDA=OFF \
+    -DGWNRT_WITH_PYTHON=OFF \
     -DGWNRT_WERROR=ON
   cmake --build build-library --parallel "$jobs"
   echo "check configs: Embree off (tests built, the tracer's Embree-dependent tests run) and the library alone built"
