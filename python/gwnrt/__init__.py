@@ -245,13 +245,13 @@ class Model:
         solid-angle level set (mode 'solid_angle'). origins and directions: (k, 3) or one (3,)
         row for every ray; tnear and tfar: a number or (k,). epsilon: the stopping distance of the
         Harnack steps, relative to the mesh's box diagonal."""
-        o = _rows3(origins, "origins")
-        d = _rows3(directions, "directions")
-        k = max(len(o), len(d))
-        if len(o) != k:
-            o = _broadcast_rows(o, k, "origins")
-        if len(d) != k:
-            d = _broadcast_rows(d, k, "directions")
+        o, d = _rows3(origins), _rows3(directions)
+        k = len(o) if o.ndim == 2 else 0
+        if o.shape[1:] == (3,) and d.shape[1:] == (3,) and len(o) != len(d):  # a single row serves every ray
+            if len(o) != 1 and len(d) != 1:
+                raise ValueError(f"origins has {len(o)} rows and directions {len(d)}: the same number, or one row")
+            k = len(d) if len(o) == 1 else len(o)
+            o, d = np.broadcast_to(o, (k, 3)), np.broadcast_to(d, (k, 3))
         near = _per_ray(tnear, k, "tnear")
         far = _per_ray(tfar, k, "tfar")
         r = _gwnrt.trace(self._native, o, d, near, far, mode=mode, level=level, epsilon=epsilon,
@@ -280,15 +280,10 @@ class Model:
         return f"gwnrt.Model({self.vertex_count} vertices, {self.triangle_count} triangles)"
 
 
-def _rows3(x, name):
+def _rows3(x):
+    """A (3,) row as (1, 3); any other shape as it is (the module checks it)."""
     a = np.asarray(x)
     return a.reshape(1, 3) if a.shape == (3,) else a
-
-
-def _broadcast_rows(a, k, name):
-    if len(a) != 1:
-        raise ValueError(f"{name} has {len(a)} rows where {k} (or 1) were expected")
-    return np.broadcast_to(a, (k, 3))
 
 
 def _per_ray(x, k, name):
@@ -331,9 +326,10 @@ def write_mesh(path, mesh, faces=None, *, normals=None, uvs=None, colors=None, s
 
 def mesh_topology(mesh, faces=None, *, weld: bool = False) -> dict:
     """Counts that say whether a mesh is a closed, consistently oriented 2-manifold: boundary,
-    non-manifold and inconsistent edges, non-manifold vertices, degenerate triangles, components,
-    and closed_manifold (watertight and manifold). weld: make exactly equal positions one vertex
-    first (for soups)."""
+    non-manifold and inconsistent edges, non-manifold vertices, degenerate triangles, components;
+    watertight (no boundary edges), manifold (no non-manifold edges or vertices) and
+    closed_manifold (both, consistently oriented, no degenerate triangles). weld: make exactly
+    equal positions one vertex first (for soups)."""
     if faces is None:
         mesh, faces = _mesh_arrays(mesh)
     return _gwnrt.mesh_topology(mesh, faces, weld=weld)

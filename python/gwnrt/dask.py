@@ -41,15 +41,22 @@ class ModelSource:
         if isinstance(mesh, (str, os.PathLike)) and faces is None:
             self.path = os.fspath(mesh)
             self.vertices = self.faces = None
+            try:  # a file rewritten since is another source: workers build it anew
+                stat = os.stat(self.path)
+                self.file_version = (stat.st_mtime_ns, stat.st_size)
+            except OSError:
+                self.file_version = None  # the workers report the error
         else:
             if faces is None:
                 mesh, faces = gwnrt._mesh_arrays(mesh)
             self.path = None
             self.vertices = np.ascontiguousarray(mesh, dtype=np.float32)
-            self.faces = np.ascontiguousarray(faces)
+            self.faces = np.ascontiguousarray(faces, dtype=np.int64)  # one token whatever the integer type
+            self.file_version = None
         self.build_options = build_options
         # The key of the workers' model cache: the file and options, or the arrays' contents.
-        self.token = dask.base.tokenize(self.path, self.vertices, self.faces, sorted(build_options.items()))
+        self.token = dask.base.tokenize(self.path, self.file_version, self.vertices, self.faces,
+                                        sorted(build_options.items()))
 
     def __dask_tokenize__(self):
         return self.token
@@ -157,8 +164,11 @@ def _as_points(points):
 def query(model_source, points, fields: Sequence[str], **options) -> dict:
     """The fields (as gwnrt.Model.query names them) at every point of a (k, 3) dask array
     (chunked by rows; a numpy array is chunked by 2^20 rows), as a dict of dask arrays: lazy,
-    one task per chunk computing every field, on the worker's cached model. options: those of
-    gwnrt.Model.query."""
+    one task per chunk computing every field, on the worker's cached model (compute the arrays
+    together, dask.compute(*result.values()), for one evaluation of each chunk). options: those
+    of gwnrt.Model.query."""
+    if isinstance(fields, str):
+        fields = [fields]
     layout = [(key, np.dtype(dtype), tuple(trailing)) for key, dtype, trailing in _gwnrt.query_columns(list(fields))]
     points = _as_points(points)
     source = _as_source(model_source)
@@ -233,8 +243,7 @@ def _mesh_file(job, build_options, options, file_format, threads):
         gwnrt.write_mesh(output, mesh, format=file_format)
         topology = gwnrt.mesh_topology(mesh)
         report.update(output=output, vertices=len(mesh.vertices), triangles=len(mesh.faces),
-                      watertight=topology["boundary_edges"] == 0,
-                      manifold=topology["non_manifold_edges"] == 0 and topology["non_manifold_vertices"] == 0,
+                      watertight=topology["watertight"], manifold=topology["manifold"],
                       closed_manifold=topology["closed_manifold"], message=mesh.stats["message"])
     except Exception as e:  # reported, so that one bad file does not fail the others
         report["error"] = f"{type(e).__name__}: {e}"
@@ -252,11 +261,14 @@ def extract_surfaces(paths: Sequence, out_dir, *, format: str = "ply", threads: 
         raise ValueError(f"format must be 'ply' or 'obj', got '{format}'")
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
-    jobs, taken = [], collections.Counter()
+    jobs, taken = [], set()
     for path in map(os.fspath, paths):
-        stem = os.path.splitext(os.path.basename(path))[0]
-        taken[stem] += 1
-        name = stem if taken[stem] == 1 else f"{stem}-{taken[stem]}"  # two inputs of one name
+        stem = name = os.path.splitext(os.path.basename(path))[0]
+        copy = 1
+        while name in taken:  # two inputs of one name: stem-2, stem-3, ... whichever is free
+            copy += 1
+            name = f"{stem}-{copy}"
+        taken.add(name)
         jobs.append((path, os.path.join(out_dir, f"{name}.{format}")))
     if not jobs:
         return []

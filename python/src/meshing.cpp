@@ -65,13 +65,10 @@ py::dict mesh_dict(SurfaceMesh&& mesh) {
 
 py::dict extract(const PythonModel& p, int64_t resolution, float cell_size, const std::string& method,
                  std::optional<float> level, float smooth_angle, bool soup, const std::vector<std::string>& attributes,
-                 const std::string& winding_method, int order, float beta, uint64_t memory_budget,
-                 std::optional<int> threads, const std::string& device) {
+                 const std::string& winding_method, int64_t order, float beta, int64_t memory_budget, Threads threads,
+                 const std::string& device) {
   MeshingOptions options;
-  if (resolution < 1 || resolution > int64_t(UINT32_MAX))
-    throw py::value_error("resolution must be at least 1 (cells along the box's longest side), got " +
-                          std::to_string(resolution));
-  options.resolution = uint32_t(resolution);
+  options.resolution = checked_integer<uint32_t>(resolution, "resolution (cells along the box's longest side)", 1);
   options.cell_size = cell_size;
   if (method == "dc")
     options.method = MeshingMethod::kDualContouring;
@@ -83,9 +80,9 @@ py::dict extract(const PythonModel& p, int64_t resolution, float cell_size, cons
   options.soup = soup;
   options.attributes = attributes_named(attributes);
   options.winding.method = winding_method_named(winding_method);
-  options.winding.taylor.order = order;
+  options.winding.taylor.order = checked_integer<int>(order, "order");
   options.winding.taylor.beta = beta;
-  options.memory_budget = memory_budget;
+  options.memory_budget = checked_integer<uint64_t>(memory_budget, "memory_budget (bytes)", 0, INT64_MAX);
   const bool gpu = use_cuda(device);
   SurfaceMesh mesh;
   MeshingStats stats;
@@ -130,7 +127,7 @@ SurfaceMesh surface_mesh(const py::handle& vertices, const py::handle& faces, co
     py::array any = py::array::ensure(source_triangles);
     if (!any || any.ndim() != 1 || (any.size() && any.dtype().kind() != 'i' && any.dtype().kind() != 'u'))
       throw py::value_error("source_triangles must be an integer array of shape (n,)");
-    auto indices = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(any);
+    const py::array_t<int64_t, py::array::c_style | py::array::forcecast> indices(any);
     mesh.source_triangles.resize(size_t(indices.shape(0)));
     for (size_t i = 0; i < mesh.source_triangles.size(); ++i) {
       const int64_t index = indices.data()[i];
@@ -175,6 +172,8 @@ py::dict topology(const py::handle& vertices, const py::handle& faces, bool weld
   d["non_manifold_vertices"] = t.non_manifold_vertices;
   d["inconsistent_edges"] = t.inconsistent_edges;
   d["components"] = t.components;
+  d["watertight"] = t.watertight();
+  d["manifold"] = t.manifold();
   d["closed_manifold"] = t.closed_manifold();
   return d;
 }
@@ -186,7 +185,7 @@ void bind_meshing(py::module_& m) {
         py::arg("cell_size") = 0.0f, py::arg("method") = "dc", py::arg("level") = py::none(),
         py::arg("smooth_angle") = 30.0f, py::arg("soup") = false, py::arg("attributes") = std::vector<std::string>{},
         py::arg("winding_method") = "auto", py::arg("order") = 2, py::arg("beta") = 2.0f,
-        py::arg("memory_budget") = uint64_t(8) << 30, py::arg("threads") = py::none(), py::arg("device") = "cpu");
+        py::arg("memory_budget") = int64_t(8) << 30, py::arg("threads") = py::none(), py::arg("device") = "cpu");
   m.def("write_mesh", &write_mesh, py::arg("path"), py::arg("vertices"), py::arg("faces"),
         py::arg("normals") = py::none(), py::arg("uvs") = py::none(), py::arg("colors") = py::none(),
         py::arg("source_triangles") = py::none(), py::arg("source_barycentrics") = py::none(),

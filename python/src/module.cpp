@@ -53,7 +53,9 @@ FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width
   const bool shaped = width == 1 ? any.ndim() == 1 : any.ndim() == 2 && any.shape(1) == width;
   if (!shaped)
     throw py::value_error(std::string(name) + " must have shape " + rows_text(width) + ", got " + shape_text(any));
-  return FloatArray::ensure(any);
+  // Not aligned (np.frombuffer at an odd offset): copied, so that the rows read as vec3s.
+  if (!(any.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_)) any = any.attr("copy")();
+  return FloatArray(any);  // converts (float64, strides, byte order) or raises, MemoryError included
 }
 
 bool use_cuda(const std::string& device) {
@@ -88,7 +90,7 @@ std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
     throw py::value_error("faces must have shape (m, 3), got " + shape_text(any));
   // Signed and unsigned indices each in a 64-bit type of their own kind, so that neither wraps.
   const auto convert = [&]<class Index>(Index) {
-    auto indices = py::array_t<Index, py::array::c_style | py::array::forcecast>::ensure(any);
+    const py::array_t<Index, py::array::c_style | py::array::forcecast> indices(any);
     std::vector<uvec3> faces(size_t(indices.shape(0)));
     const Index* v = indices.data();
     for (size_t f = 0; f < faces.size(); ++f) {
@@ -139,7 +141,7 @@ BuildOptions build_options(bool classify_sheets, float level, const std::string&
   return options;
 }
 
-std::unique_ptr<PythonModel> build_model(Mesh mesh, const BuildOptions& options, std::optional<int> threads) {
+std::unique_ptr<PythonModel> build_model(Mesh mesh, const BuildOptions& options, Threads threads) {
   auto out = std::make_unique<PythonModel>();
   if (options.classify_sheets) out->sheet_level = options.sheet_level;
   check(run_released(threads, [&] { return GwnModel::build(std::move(mesh), out->model, options); }));
@@ -157,7 +159,7 @@ py::array vec3_copy(std::span<const vec3> v) {
 void bind_model(py::module_& m) {
   py::class_<PythonModel>(m, "Model")
       .def(py::init([](const py::handle& vertices, const py::handle& faces, bool classify_sheets, float level,
-                       const std::string& sheet_method, std::optional<int> threads) {
+                       const std::string& sheet_method, Threads threads) {
              const BuildOptions options = build_options(classify_sheets, level, sheet_method);
              const FloatArray positions = float_rows(vertices, "vertices", 3);
              Mesh mesh;
@@ -170,7 +172,7 @@ void bind_model(py::module_& m) {
       .def_static(
           "load",
           [](const std::string& path, bool classify_sheets, float level, const std::string& sheet_method,
-             std::optional<int> threads) {
+             Threads threads) {
             const BuildOptions options = build_options(classify_sheets, level, sheet_method);
             Mesh mesh;
             MeshLoadReport report;
@@ -201,9 +203,12 @@ void bind_model(py::module_& m) {
                              })
       .def_property_readonly("sheet_level",
                              [](const PythonModel& p) -> std::optional<float> {
-                               std::shared_lock lock(p.level_mutex);
-                               if (std::isnan(p.sheet_level)) return std::nullopt;
-                               return p.sheet_level;
+                               const float level = run_released(std::nullopt, [&] {
+                                 std::shared_lock lock(p.level_mutex);  // a classification may be running
+                                 return p.sheet_level;
+                               });
+                               if (std::isnan(level)) return std::nullopt;
+                               return level;
                              })
       .def_property_readonly("boundary_segment_count",
                              [](const PythonModel& p) {

@@ -3,7 +3,9 @@
 // turned into a Python exception, and a batch run with the GIL released on `threads` TBB workers.
 #pragma once
 
+#include <climits>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -64,15 +66,29 @@ py::array adopt_rows(std::vector<V>&& v, py::ssize_t width) {
   return py::array_t<T>(shape, reinterpret_cast<const T*>(owner->data()), base);
 }
 
+// An integer argument as T when it lies in [lo, hi], else ValueError naming it (taken as int64
+// and checked here: pybind11 would answer a negative number for an unsigned parameter with a
+// TypeError and its signatures).
+template <class T>
+T checked_integer(int64_t value, const char* name, T lo = std::numeric_limits<T>::lowest(),
+                  T hi = std::numeric_limits<T>::max()) {
+  if (value < int64_t(lo) || (value > 0 && uint64_t(value) > uint64_t(hi)))
+    throw py::value_error(std::string(name) + " must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                          "], got " + std::to_string(value));
+  return T(value);
+}
+
+// TBB workers for a call: None or 0 for all cores.
+using Threads = std::optional<int64_t>;
+
 // Runs fn with the GIL released, on at most `threads` TBB workers when given (> 0; 0 or None:
 // all cores). Throws ValueError for a negative count.
 template <class Fn>
-auto run_released(std::optional<int> threads, Fn&& fn) {
-  if (threads && *threads < 0)
-    throw py::value_error("threads must be >= 0 (0 or None: all cores), got " + std::to_string(*threads));
+auto run_released(Threads threads, Fn&& fn) {
+  const int workers = threads ? checked_integer<int>(*threads, "threads", 0, INT_MAX) : 0;
   py::gil_scoped_release release;
-  if (threads && *threads > 0) {
-    tbb::task_arena arena(*threads);
+  if (workers > 0) {
+    tbb::task_arena arena(workers);
     return arena.execute(std::forward<Fn>(fn));
   }
   return fn();

@@ -16,12 +16,12 @@
 namespace gwnrt::python {
 namespace {
 
-// Adds result column `key` to `out` (or finds it, when two fields share it) and points `column`
-// at its rows.
+// Adds result column `key` (each key once: for_each_column names a shared column once) to `out`
+// and points `column` at its rows.
 template <class T, class P>
 void add_column(py::dict& out, const char* key, size_t rows, std::vector<py::ssize_t> trailing, P*& column) {
   static_assert(sizeof(T) == sizeof(P));
-  py::array_t<T> array = out.contains(key) ? out[key].cast<py::array_t<T>>() : new_rows<T>(rows, std::move(trailing));
+  py::array_t<T> array = new_rows<T>(rows, std::move(trailing));
   out[key] = array;
   column = reinterpret_cast<P*>(array.mutable_data());
 }
@@ -111,8 +111,6 @@ py::list query_columns(const std::vector<std::string>& names) {
   PointColumns unused;
   for_each_column(fields_named(names), unused,
                   [&]<class T, class P>(const char* key, std::vector<py::ssize_t> trailing, P*&) {
-                    for (const py::handle& seen : out)
-                      if (seen.cast<py::tuple>()[0].cast<std::string>() == key) return;
                     out.append(py::make_tuple(key, py::dtype::of<T>(), py::tuple(py::cast(trailing))));
                   });
   return out;
@@ -120,14 +118,14 @@ py::list query_columns(const std::vector<std::string>& names) {
 
 // The request but its level, which evaluate_on sets under the level lock (a default read
 // before it could be stale by the time the batch runs).
-QueryRequest query_request(const std::vector<std::string>& fields, const std::string& method, int order, float beta,
-                           uint32_t newton_iterations, float newton_tolerance) {
+QueryRequest query_request(const std::vector<std::string>& fields, const std::string& method, int64_t order, float beta,
+                           int64_t newton_iterations, float newton_tolerance) {
   QueryRequest request;
   request.fields = fields_named(fields);
   request.method = winding_method_named(method);
-  request.taylor.order = order;
+  request.taylor.order = checked_integer<int>(order, "order");
   request.taylor.beta = beta;
-  request.newton.max_iterations = newton_iterations;
+  request.newton.max_iterations = checked_integer<uint32_t>(newton_iterations, "max_iterations");
   request.newton.tolerance = newton_tolerance;
   return request;
 }
@@ -154,8 +152,8 @@ Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points,
 }
 
 py::dict query(const PythonModel& p, const py::handle& points_obj, const std::vector<std::string>& fields,
-               const std::string& method, int order, float beta, std::optional<float> level, uint32_t newton_iterations,
-               float newton_tolerance, std::optional<int> threads, const std::string& device) {
+               const std::string& method, int64_t order, float beta, std::optional<float> level,
+               int64_t newton_iterations, float newton_tolerance, Threads threads, const std::string& device) {
   const QueryRequest request = query_request(fields, method, order, beta, newton_iterations, newton_tolerance);
   const bool gpu = use_cuda(device);
   const FloatArray points = float_rows(points_obj, "points", 3);
@@ -173,14 +171,14 @@ TraceMode trace_mode_named(const std::string& name) {
 
 py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::handle& directions_obj,
                const py::handle& tnear_obj, const py::handle& tfar_obj, const std::string& mode, float level,
-               float epsilon, uint32_t max_steps, uint32_t max_crossings, float beta, bool exact,
-               std::optional<int> threads, const std::string& device) {
+               float epsilon, int64_t max_steps, int64_t max_crossings, float beta, bool exact, Threads threads,
+               const std::string& device) {
   TraceOptions options;
   options.mode = trace_mode_named(mode);
   options.level = level;
   options.epsilon = epsilon;
-  options.max_steps = max_steps;
-  options.max_crossings = max_crossings;
+  options.max_steps = checked_integer<uint32_t>(max_steps, "max_steps");
+  options.max_crossings = checked_integer<uint32_t>(max_crossings, "max_crossings");
   options.beta = beta;
   options.exact = exact;
   const bool gpu = use_cuda(device);
@@ -248,17 +246,19 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
 // The C++ batch as a C++ program calls it (results in a PointResult array allocated once, outside
 // the timing), `repeats` times: the baseline of the Python benchmark (examples/python/bench_python.py).
 std::vector<double> cxx_batch_seconds(const PythonModel& p, const py::handle& points_obj,
-                                      const std::vector<std::string>& fields, const std::string& method, int order,
-                                      float beta, int repeats, std::optional<int> threads) {
+                                      const std::vector<std::string>& fields, const std::string& method, int64_t order,
+                                      float beta, int repeats, Threads threads) {
   QueryRequest request = query_request(fields, method, order, beta, 32, 1e-4f);
-  std::shared_lock lock(p.level_mutex);  // set_sheet_level waits for the benchmark
-  request.level = level_or_default(p, std::nullopt);
   const FloatArray points = float_rows(points_obj, "points", 3);
   std::vector<double> seconds;
   std::vector<PointResult> results(size_t(points.shape(0)));
   for (int r = 0; r < repeats; ++r) {
     const auto start = std::chrono::steady_clock::now();
-    check(run_released(threads, [&] { return evaluate_points(p.model, as_vec3(points), request, results); }));
+    check(run_released(threads, [&] {
+      std::shared_lock lock(p.level_mutex);
+      request.level = level_or_default(p, std::nullopt);
+      return evaluate_points(p.model, as_vec3(points), request, results);
+    }));
     seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   return seconds;
@@ -268,12 +268,13 @@ std::vector<double> cxx_batch_seconds(const PythonModel& p, const py::handle& po
 
 void bind_queries(py::module_& m) {
   m.def("query", &query, py::arg("model"), py::arg("points"), py::arg("fields"), py::arg("method") = "auto",
-        py::arg("order") = 2, py::arg("beta") = 2.0f, py::arg("level") = py::none(), py::arg("newton_iterations") = 32u,
-        py::arg("newton_tolerance") = 1e-4f, py::arg("threads") = py::none(), py::arg("device") = "cpu");
-  m.def("trace", &trace, py::arg("model"), py::arg("origins"), py::arg("directions"), py::arg("tnear"), py::arg("tfar"),
-        py::arg("mode") = "gwn", py::arg("level") = 0.5f, py::arg("epsilon") = 1e-5f, py::arg("max_steps") = 4096u,
-        py::arg("max_crossings") = 65536u, py::arg("beta") = 2.0f, py::arg("exact") = false,
+        py::arg("order") = 2, py::arg("beta") = 2.0f, py::arg("level") = py::none(),
+        py::arg("newton_iterations") = int64_t(32), py::arg("newton_tolerance") = 1e-4f,
         py::arg("threads") = py::none(), py::arg("device") = "cpu");
+  m.def("trace", &trace, py::arg("model"), py::arg("origins"), py::arg("directions"), py::arg("tnear"), py::arg("tfar"),
+        py::arg("mode") = "gwn", py::arg("level") = 0.5f, py::arg("epsilon") = 1e-5f,
+        py::arg("max_steps") = int64_t(4096), py::arg("max_crossings") = int64_t(65536), py::arg("beta") = 2.0f,
+        py::arg("exact") = false, py::arg("threads") = py::none(), py::arg("device") = "cpu");
   m.def("query_columns", &query_columns, py::arg("fields"));
   m.def("_cxx_batch_seconds", &cxx_batch_seconds, py::arg("model"), py::arg("points"), py::arg("fields"),
         py::arg("method") = "auto", py::arg("order") = 2, py::arg("beta") = 2.0f, py::arg("repeats") = 1,

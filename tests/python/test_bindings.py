@@ -190,6 +190,38 @@ def test_bad_options(model, points32):
         model.trace(p, [0.0, 0.0, 1.0], mode="bogus")
     with pytest.raises(ValueError, match="winding_method|method must be"):
         model.extract_surface(8, winding_method="bogus")
+    # Integers out of their range are ValueErrors naming the argument, not pybind11's TypeErrors.
+    for call, name in ((lambda: model.project(p, max_iterations=-1), "max_iterations"),
+                       (lambda: model.trace(p, [0.0, 0.0, 1.0], max_steps=-1), "max_steps"),
+                       (lambda: model.trace(p, [0.0, 0.0, 1.0], max_crossings=2**40), "max_crossings"),
+                       (lambda: model.extract_surface(8, memory_budget=-1), "memory_budget"),
+                       (lambda: model.extract_surface(2**40), "resolution"),
+                       (lambda: model.winding_number(p, order=2**40), "order")):
+        with pytest.raises(ValueError, match=name + ".* must lie in"):
+            call()
+    # Trace inputs of the wrong shapes.
+    with pytest.raises(ValueError, match=r"origins must have shape \(k, 3\), got \(\)"):
+        model.trace(1.0, [1.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="origins has 2 rows and directions 3"):
+        model.trace(p[:2], p[:3])
+    assert len(model.trace([0.0, 0.0, 0.0], np.empty((0, 3))).hit) == 0  # one origin, no rays
+
+
+def test_inputs_that_cannot_be_converted_raise(model):
+    # A conversion numpy cannot allocate (10^12 rows broadcast from one) is a MemoryError, not a crash.
+    huge = np.broadcast_to(np.float64([0.0, 0.0, 0.0]), (10**12, 3))
+    with pytest.raises(MemoryError):
+        model.winding_number(huge)
+    with pytest.raises(MemoryError):
+        gwnrt.Model(np.eye(3), np.broadcast_to(np.int32([0, 1, 2]), (10**12, 3)))
+
+
+def test_misaligned_float32_points_are_copied(model, points32):
+    raw = np.zeros(points32.nbytes + 1, dtype=np.uint8)
+    misaligned = np.frombuffer(raw.data, dtype=np.float32, count=points32.size, offset=1).reshape(-1, 3)
+    misaligned[...] = points32  # frombuffer of a writable buffer is writable
+    assert not misaligned.flags.aligned
+    np.testing.assert_array_equal(model.winding_number(misaligned), model.winding_number(points32))
 
 
 # -- meshes and files ------------------------------------------------------------------------------
@@ -450,7 +482,7 @@ def test_threads_argument(bunny_holes):
     m1, m2 = bunny_holes.extract_surface(32, threads=1), bunny_holes.extract_surface(32, threads=2)
     np.testing.assert_array_equal(m1.vertices, m2.vertices)
     np.testing.assert_array_equal(m1.faces, m2.faces)
-    message = r"threads must be >= 0 \(0 or None: all cores\), got -1"
+    message = r"threads must lie in \[0, 2147483647\], got -1"
     for call in (lambda: bunny_holes.winding_number(points, threads=-1),
                  lambda: bunny_holes.query(points, ["signed_distance"], threads=-1),
                  lambda: bunny_holes.trace(*rays, threads=-1),
@@ -458,6 +490,8 @@ def test_threads_argument(bunny_holes):
                  lambda: gwnrt.Model(bunny_holes.vertices, bunny_holes.faces, threads=-1)):
         with pytest.raises(ValueError, match=message):
             call()
+    with pytest.raises(ValueError, match=r"threads must lie in \[0, 2147483647\], got 1099511627776"):
+        bunny_holes.winding_number(points, threads=2**40)
 
 
 def test_device_argument(model, points32):

@@ -98,6 +98,18 @@ def test_a_scattered_source(client):
     np.testing.assert_array_equal(w, model.winding_number(points))
 
 
+def test_a_rewritten_file_is_built_again(client, tmp_path):
+    path = tmp_path / "mesh.obj"
+    shutil.copy(BUNNY_HOLES, path)
+    points = points_in_box(gwnrt.load(BUNNY_HOLES), 20000, 5)
+    x = dask_array.from_array(points, chunks=(5000, 3))
+    before = gd.winding_number(path, x).compute()
+    path.write_text("v -9 -9 -9\nv -8 -9 -9\nv -9 -8 -9\nf 1 2 3\n")  # far from the points
+    after = gd.winding_number(path, x).compute()
+    np.testing.assert_array_equal(after, gwnrt.load(path).winding_number(points))
+    assert not np.array_equal(after, before)
+
+
 def test_bad_points_fail_with_the_libraries_message(client):
     points = np.zeros((1000, 3), dtype=np.float32)
     points[777] = np.nan
@@ -106,6 +118,7 @@ def test_bad_points_fail_with_the_libraries_message(client):
         w.compute()
     with pytest.raises(ValueError, match=r"shape \(k, 3\)"):
         gd.winding_number(BUNNY_HOLES, dask_array.zeros((10, 2)))
+    assert set(gd.query(BUNNY_HOLES, points[:10], "w")) == {"w"}  # one field name, not its letters
     with pytest.raises(TypeError, match="ModelSource"):
         gd.winding_number(gwnrt.load(BUNNY_HOLES), points)
 
@@ -120,6 +133,14 @@ def test_extract_surfaces_reports_each_file(client, tmp_path):
     paths = [inputs / "bunny.obj", broken, inputs / "holes.obj"]
     reports = gd.extract_surfaces(paths, tmp_path / "out", resolution=48)
     assert [r["path"] for r in reports] == [os.fspath(p) for p in paths]
+    # Inputs of one name (and one named like a renamed copy) get outputs of their own.
+    (inputs / "again").mkdir()
+    shutil.copy(inputs / "holes.obj", inputs / "again" / "holes.obj")
+    shutil.copy(inputs / "holes.obj", inputs / "holes-2.obj")
+    same_names = gd.extract_surfaces([inputs / "holes.obj", inputs / "again" / "holes.obj", inputs / "holes-2.obj"],
+                                     tmp_path / "same", resolution=16)
+    outputs = [r["output"] for r in same_names]
+    assert len(set(outputs)) == 3 and all(os.path.exists(o) for o in outputs), outputs
     good = [reports[0], reports[2]]
     for r in good:
         assert r["error"] is None, r

@@ -42,9 +42,10 @@ struct MeshTopology {
   // A closed, consistently oriented 2-manifold without degenerate triangles: every count but
   // vertices, unreferenced_vertices, triangles and components is zero.
   bool closed_manifold() const {
-    return degenerate_triangles == 0 && boundary_edges == 0 && non_manifold_edges == 0 && non_manifold_vertices == 0 &&
-           inconsistent_edges == 0;
+    return degenerate_triangles == 0 && watertight() && manifold() && inconsistent_edges == 0;
   }
+  bool watertight() const { return boundary_edges == 0; }                                  // no open edges
+  bool manifold() const { return non_manifold_edges == 0 && non_manifold_vertices == 0; }  // edges and vertices
   bool operator==(const MeshTopology&) const = default;
 };
 
