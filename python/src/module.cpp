@@ -109,7 +109,8 @@ std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
 
 float level_or_default(const PythonModel& p, std::optional<float> level) {
   if (level) return *level;
-  return std::isnan(p.sheet_level) ? 0.5f : p.sheet_level;
+  const float sheets = p.model.requested_sheet_level();
+  return std::isnan(sheets) ? 0.5f : sheets;
 }
 
 #if defined(GWNRT_HAVE_CUDA)
@@ -143,7 +144,6 @@ BuildOptions build_options(bool classify_sheets, float level, const std::string&
 
 std::unique_ptr<PythonModel> build_model(Mesh mesh, const BuildOptions& options, Threads threads) {
   auto out = std::make_unique<PythonModel>();
-  if (options.classify_sheets) out->sheet_level = options.sheet_level;
   check(run_released(threads, [&] { return GwnModel::build(std::move(mesh), out->model, options); }));
   return out;
 }
@@ -205,7 +205,7 @@ void bind_model(py::module_& m) {
                              [](const PythonModel& p) -> std::optional<float> {
                                const float level = run_released(std::nullopt, [&] {
                                  std::shared_lock lock(p.level_mutex);  // a classification may be running
-                                 return p.sheet_level;
+                                 return p.model.requested_sheet_level();
                                });
                                if (std::isnan(level)) return std::nullopt;
                                return level;
@@ -224,9 +224,7 @@ void bind_model(py::module_& m) {
               std::lock_guard<std::mutex> device_lock(p.device_mutex);
               p.device.reset();  // uploaded again with the new sheets when next asked
 #endif
-              Status s = p.model.set_sheet_level(level);
-              if (s.ok()) p.sheet_level = level;
-              return s;
+              return p.model.set_sheet_level(level);
             }));
           },
           py::arg("level"));

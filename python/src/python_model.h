@@ -19,9 +19,6 @@ namespace gwnrt::python {
 
 struct PythonModel {
   GwnModel model;
-  // The level the sheets are classified for, or are to be on first need (the model defers them);
-  // NaN without sheets. Under level_mutex, which set_sheet_level holds alone.
-  float sheet_level = __builtin_nanf("");
   mutable std::shared_mutex level_mutex;
 #if defined(GWNRT_HAVE_CUDA)
   mutable std::mutex device_mutex;

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <thread>
 #include <vector>
@@ -159,6 +160,30 @@ TEST(DeferredParts, WithoutSheetsTheSignedDistanceIsRefusedUntilALevelIsSet) {
   EXPECT_EQ(bare.built_parts(), uint32_t(kPartTriangles | kPartBoundary | kPartSheets));
   ASSERT_TRUE(evaluate_points(bare, points, sdf, results).ok());
   for (size_t i = 0; i < points.size(); ++i) ASSERT_TRUE(same_results(results[i], expected[i])) << "point " << i;
+}
+
+TEST(DeferredParts, TheRequestedSheetLevelIsKnownBeforeTheSheetsAreBuilt) {
+  const Mesh mesh = load_test_mesh("bunny_holes.obj");
+  BuildOptions options;
+  options.defer_parts = true;
+  options.sheet_level = 0.3f;
+  GwnModel model;
+  ASSERT_TRUE(GwnModel::build(mesh, model, options).ok());
+  EXPECT_TRUE(std::isnan(model.sheet_level()));  // not classified yet
+  EXPECT_EQ(model.requested_sheet_level(), 0.3f);
+  ASSERT_TRUE(model.prepare(kPartSheets).ok());
+  EXPECT_EQ(model.sheet_level(), 0.3f);
+  EXPECT_EQ(model.requested_sheet_level(), 0.3f);
+  ASSERT_TRUE(model.set_sheet_level(0.6f).ok());
+  EXPECT_EQ(model.sheet_level(), 0.6f);
+  EXPECT_EQ(model.requested_sheet_level(), 0.6f);
+  EXPECT_FALSE(model.set_sheet_level(kInfinity).ok());
+  EXPECT_EQ(model.requested_sheet_level(), 0.6f);  // a refused level is not requested
+  // Without sheets: none requested until a level is set.
+  GwnModel bare = build_with(mesh, true, false);
+  EXPECT_TRUE(std::isnan(bare.requested_sheet_level()));
+  ASSERT_TRUE(bare.set_sheet_level(0.5f).ok());
+  EXPECT_EQ(bare.requested_sheet_level(), 0.5f);
 }
 
 // Many threads ask a deferred model at the same moment, each for different parts (the distance

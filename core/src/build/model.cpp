@@ -199,8 +199,16 @@ Status GwnModel::set_sheet_level(float level) {
     if (!deferral_) return Status{StatusCode::kInvalidArgument, kEmptyModel};
     std::lock_guard<std::mutex> lock(deferral_->mutex);
     if (Status s = build_boundary(); !s.ok()) return s;
-    return set_sheet_level_locked(level);
+    if (Status s = set_sheet_level_locked(level); !s.ok()) return s;
+    // Kept for every later prepare and for requested_sheet_level (prepare only reads the options).
+    deferral_->options.sheet_level = level;
+    deferral_->options.classify_sheets = true;
+    return Status::Ok();
   });
+}
+
+float GwnModel::requested_sheet_level() const {
+  return deferral_ && deferral_->options.classify_sheets ? deferral_->options.sheet_level : __builtin_nanf("");
 }
 
 Status GwnModel::set_sheet_level_locked(float level) const {
@@ -281,7 +289,6 @@ Status GwnModel::set_sheet_level_locked(float level) const {
       return s;
   }
   sheet_level_ = level;
-  deferral_->options.classify_sheets = true;  // classified now: kept for every later prepare
   timings_.sheet_seconds = seconds_since(t0);
   deferral_->built.fetch_or(kPartSheets, std::memory_order_release);
   return Status::Ok();

@@ -103,6 +103,11 @@ class GwnModel {
   float sheet_side_tolerance() const { return sheet_method_ == WindingMethod::kCrossing ? 0.0f : kSheetSideTolerance; }
   const TriangleTree& sheet_tree() const { return sheets_; }  // for distances: no moments
   float sheet_level() const { return sheet_level_; }
+  // The level the sheets are classified for, or will be on first need (a model built with
+  // defer_parts, whose sheet_level() is NaN until then): BuildOptions::sheet_level, or the last
+  // set_sheet_level's; NaN for a model without sheets. Safe beside prepare on other threads, not
+  // beside set_sheet_level.
+  float requested_sheet_level() const;
   // Classifies the sheets for another w* (evaluating w only at the centroids whose stored value
   // is too coarse to decide) and rebuilds the sheet tree; the first time, builds the boundary
   // if it is not. Not thread-safe with queries running on this model. Fails on a non-finite level.
