@@ -38,15 +38,12 @@ Status parse_attributes(const std::string& list, uint32_t& out) {
   std::stringstream in(list);
   std::string item;
   while (std::getline(in, item, ',')) {
-    if (item == "source")
-      out |= gwnrt::kAttributeSource;
-    else if (item == "uv")
-      out |= gwnrt::kAttributeUv;
-    else if (item == "color")
-      out |= gwnrt::kAttributeColor;
-    else if (!item.empty())
+    if (item.empty()) continue;
+    const uint32_t attribute = gwnrt::mesh_attribute_named(item);
+    if (attribute == 0)
       return {gwnrt::StatusCode::kInvalidArgument,
-              "--attributes: unknown attribute '" + item + "' (source, uv or color)"};
+              "--attributes: unknown attribute '" + item + "' (" + gwnrt::kMeshAttributeNames + ")"};
+    out |= attribute;
   }
   return Status::Ok();
 }

@@ -16,14 +16,9 @@ namespace {
 uint32_t attributes_named(const std::vector<std::string>& names) {
   uint32_t attributes = 0;
   for (const std::string& name : names) {
-    if (name == "source")
-      attributes |= kAttributeSource;
-    else if (name == "uv")
-      attributes |= kAttributeUv;
-    else if (name == "color")
-      attributes |= kAttributeColor;
-    else
-      throw py::value_error("unknown attribute '" + name + "' (attributes: source, uv, color)");
+    const uint32_t attribute = mesh_attribute_named(name);
+    if (attribute == 0) throw py::value_error("unknown attribute '" + name + "' (" + kMeshAttributeNames + ")");
+    attributes |= attribute;
   }
   return attributes;
 }

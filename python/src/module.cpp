@@ -58,17 +58,21 @@ FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width
   return FloatArray(any);  // converts (float64, strides, byte order) or raises, MemoryError included
 }
 
+bool cuda_usable(std::string& why) {
+#if defined(GWNRT_HAVE_CUDA)
+  return cuda::device_available(&why);
+#else
+  why = "this gwnrt module was built without the CUDA backend";
+  return false;
+#endif
+}
+
 bool use_cuda(const std::string& device) {
   if (device == "cpu") return false;
   if (device != "cuda" && device != "auto")
     throw py::value_error("device must be 'cpu', 'cuda' or 'auto', got '" + device + "'");
-#if defined(GWNRT_HAVE_CUDA)
   std::string why;
-  const bool usable = cuda::device_available(&why);
-#else
-  const bool usable = false;
-  const std::string why = "this gwnrt module was built without the CUDA backend";
-#endif
+  const bool usable = cuda_usable(why);
   if (device == "cuda" && !usable) throw std::runtime_error("device='cuda': " + why);
   return usable;
 }
@@ -239,13 +243,9 @@ PYBIND11_MODULE(_gwnrt, m) {
   gwnrt::python::bind_queries(m);
   gwnrt::python::bind_meshing(m);
   m.def("device_available", []() -> py::tuple {
-#if defined(GWNRT_HAVE_CUDA)
     std::string why;
-    const bool usable = gwnrt::cuda::device_available(&why);
+    const bool usable = gwnrt::python::cuda_usable(why);
     return py::make_tuple(usable, why);
-#else
-    return py::make_tuple(false, std::string("this gwnrt module was built without the CUDA backend"));
-#endif
   });
   m.attr("has_cuda_backend") =
 #if defined(GWNRT_HAVE_CUDA)

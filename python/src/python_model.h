@@ -28,6 +28,9 @@ struct PythonModel {
 #endif
 };
 
+// Whether the CUDA backend is built in and a GPU usable; `why` says what is missing otherwise.
+bool cuda_usable(std::string& why);
+
 // Whether `device` ("cpu", "cuda" or "auto") runs on the GPU; ValueError for another name,
 // RuntimeError for "cuda" without a usable GPU (saying why). "auto" takes the GPU when usable.
 bool use_cuda(const std::string& device);

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model.h"
@@ -21,6 +22,16 @@ enum MeshAttribute : uint32_t {
   kAttributeUv = 1u << 1,
   kAttributeColor = 1u << 2,
 };
+
+// The MeshAttribute called `name`, 0 for any other name: for the programs and bindings that take
+// attributes by name (kMeshAttributeNames lists the names, for their messages).
+inline constexpr const char* kMeshAttributeNames = "source, uv or color";
+inline uint32_t mesh_attribute_named(std::string_view name) {
+  if (name == "source") return kAttributeSource;
+  if (name == "uv") return kAttributeUv;
+  if (name == "color") return kAttributeColor;
+  return 0;
+}
 
 struct MeshingOptions {
   // Cells along the longest side of the box that holds S, or (when > 0) the cell size itself.
