@@ -103,6 +103,24 @@ class MeshResult(NamedTuple):
     stats: dict
 
 
+# The fields whose result is a named tuple, with the query columns that fill it, in its order;
+# every other field's result is its one column. Model's methods and gwnrt.dask share it.
+_NAMED_RESULTS = {
+    "unsigned_distance": (DistanceResult, ("distance", "triangle", "barycentrics")),
+    "boundary_distance": (BoundaryDistanceResult, ("boundary_distance", "boundary_segment")),
+    "signed_distance": (SignedDistanceResult, ("sdf", "sdf1", "sdf2", "sheet_distance", "sheet_triangle", "piece")),
+    "projection": (ProjectionResult, ("projection", "converged", "iterations", "residual")),
+}
+
+
+def _field_result(field, columns):
+    """One field's result from query's columns (numpy or dask arrays)."""
+    if field not in _NAMED_RESULTS:
+        return columns[field]
+    result, keys = _NAMED_RESULTS[field]
+    return result(*(columns[key] for key in keys))
+
+
 def _mesh_arrays(mesh):
     """(vertices, faces) of an object with .vertices and .faces (trimesh) or .triangles (open3d)."""
     vertices = getattr(mesh, "vertices", None)
@@ -188,54 +206,50 @@ class Model:
                             level=level, newton_iterations=max_iterations, newton_tolerance=tolerance,
                             threads=threads, device=device)
 
+    def _field(self, field, points, **options):
+        return _field_result(field, self.query(points, [field], **options))
+
     def winding_number(self, points, method: str = "auto", order: int = 2, beta: float = 2.0, *,
                        threads: Optional[int] = None, device: str = "cpu") -> np.ndarray:
         """w at each point, (k,) float32."""
-        return self.query(points, ["w"], method=method, order=order, beta=beta, threads=threads,
-                          device=device)["w"]
+        return self._field("w", points, method=method, order=order, beta=beta, threads=threads, device=device)
 
     def gradient(self, points, method: str = "auto", order: int = 2, beta: float = 2.0, *,
                  threads: Optional[int] = None, device: str = "cpu") -> np.ndarray:
         """grad w at each point, (k, 3) float32."""
-        return self.query(points, ["gradient"], method=method, order=order, beta=beta, threads=threads,
-                          device=device)["gradient"]
+        return self._field("gradient", points, method=method, order=order, beta=beta, threads=threads,
+                           device=device)
 
     def hessian(self, points, method: str = "auto", order: int = 2, beta: float = 2.0, *,
                 threads: Optional[int] = None, device: str = "cpu") -> np.ndarray:
         """The Hessian of w at each point, (k, 3, 3) float32."""
-        return self.query(points, ["hessian"], method=method, order=order, beta=beta, threads=threads,
-                          device=device)["hessian"]
+        return self._field("hessian", points, method=method, order=order, beta=beta, threads=threads,
+                           device=device)
 
     def unsigned_distance(self, points, *, threads: Optional[int] = None, device: str = "cpu") -> DistanceResult:
-        r = self.query(points, ["unsigned_distance"], threads=threads, device=device)
-        return DistanceResult(r["distance"], r["triangle"], r["barycentrics"])
+        return self._field("unsigned_distance", points, threads=threads, device=device)
 
     def boundary_distance(self, points, *, threads: Optional[int] = None,
                           device: str = "cpu") -> BoundaryDistanceResult:
-        r = self.query(points, ["boundary_distance"], threads=threads, device=device)
-        return BoundaryDistanceResult(r["boundary_distance"], r["boundary_segment"])
+        return self._field("boundary_distance", points, threads=threads, device=device)
 
     def signed_distance(self, points, level: Optional[float] = None, method: str = "auto", order: int = 2,
                         beta: float = 2.0, *, threads: Optional[int] = None, device: str = "cpu") -> SignedDistanceResult:
         """The signed distance to S for `level` (None: the sheets' level; another level needs
         set_sheet_level first)."""
-        r = self.query(points, ["signed_distance"], method=method, order=order, beta=beta, level=level,
-                       threads=threads, device=device)
-        return SignedDistanceResult(r["sdf"], r["sdf1"], r["sdf2"], r["sheet_distance"], r["sheet_triangle"],
-                                    r["piece"])
+        return self._field("signed_distance", points, method=method, order=order, beta=beta, level=level,
+                           threads=threads, device=device)
 
     def project(self, points, level: Optional[float] = None, method: str = "auto", order: int = 2,
                 beta: float = 2.0, *, max_iterations: int = 32, tolerance: float = 1e-4,
                 threads: Optional[int] = None, device: str = "cpu") -> ProjectionResult:
-        r = self.query(points, ["projection"], method=method, order=order, beta=beta, level=level,
-                       max_iterations=max_iterations, tolerance=tolerance, threads=threads, device=device)
-        return ProjectionResult(r["projection"], r["converged"], r["iterations"], r["residual"])
+        return self._field("projection", points, method=method, order=order, beta=beta, level=level,
+                           max_iterations=max_iterations, tolerance=tolerance, threads=threads, device=device)
 
     def harnack_bound(self, points, level: Optional[float] = None, beta: float = 2.0, *,
                       threads: Optional[int] = None, device: str = "cpu") -> np.ndarray:
         """rho(x) <= the distance from x to S, a proven lower bound."""
-        return self.query(points, ["harnack_bound"], beta=beta, level=level, threads=threads,
-                          device=device)["harnack_bound"]
+        return self._field("harnack_bound", points, beta=beta, level=level, threads=threads, device=device)
 
     # -- rays ------------------------------------------------------------------------------------
     def trace(self, origins, directions, tnear=0.0, tfar=math.inf, *, mode: str = "gwn", level: float = 0.5,

@@ -192,42 +192,41 @@ def query(model_source, points, fields: Sequence[str], **options) -> dict:
     return out
 
 
+def _field(field, model_source, points, options):
+    return gwnrt._field_result(field, query(model_source, points, [field], **options))
+
+
 def winding_number(model_source, points, **options) -> da.Array:
     """w at every point (a lazy dask array); options: method, order, beta, threads."""
-    return query(model_source, points, ["w"], **options)["w"]
+    return _field("w", model_source, points, options)
 
 
 def gradient(model_source, points, **options) -> da.Array:
-    return query(model_source, points, ["gradient"], **options)["gradient"]
+    return _field("gradient", model_source, points, options)
 
 
 def hessian(model_source, points, **options) -> da.Array:
-    return query(model_source, points, ["hessian"], **options)["hessian"]
+    return _field("hessian", model_source, points, options)
 
 
 def unsigned_distance(model_source, points, **options) -> gwnrt.DistanceResult:
-    r = query(model_source, points, ["unsigned_distance"], **options)
-    return gwnrt.DistanceResult(r["distance"], r["triangle"], r["barycentrics"])
+    return _field("unsigned_distance", model_source, points, options)
 
 
 def boundary_distance(model_source, points, **options) -> gwnrt.BoundaryDistanceResult:
-    r = query(model_source, points, ["boundary_distance"], **options)
-    return gwnrt.BoundaryDistanceResult(r["boundary_distance"], r["boundary_segment"])
+    return _field("boundary_distance", model_source, points, options)
 
 
 def signed_distance(model_source, points, **options) -> gwnrt.SignedDistanceResult:
-    r = query(model_source, points, ["signed_distance"], **options)
-    return gwnrt.SignedDistanceResult(r["sdf"], r["sdf1"], r["sdf2"], r["sheet_distance"], r["sheet_triangle"],
-                                      r["piece"])
+    return _field("signed_distance", model_source, points, options)
 
 
 def project(model_source, points, **options) -> gwnrt.ProjectionResult:
-    r = query(model_source, points, ["projection"], **options)
-    return gwnrt.ProjectionResult(r["projection"], r["converged"], r["iterations"], r["residual"])
+    return _field("projection", model_source, points, options)
 
 
 def harnack_bound(model_source, points, **options) -> da.Array:
-    return query(model_source, points, ["harnack_bound"], **options)["harnack_bound"]
+    return _field("harnack_bound", model_source, points, options)
 
 
 # -- meshing many files ---------------------------------------------------------------------------

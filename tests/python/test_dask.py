@@ -158,4 +158,11 @@ def test_threaded_scheduler_without_a_client():
     points = points_in_box(model, 50000, 3)
     with __import__("dask").config.set(scheduler="threads"):
         w = gd.winding_number(gd.ModelSource(model.vertices, model.faces), points).compute()
+        # Every other point query gives the in-process call's result, named alike.
+        for name in ("hessian", "boundary_distance", "project", "harnack_bound"):
+            (got,) = __import__("dask").compute(getattr(gd, name)(BUNNY_HOLES, points[:3000]))
+            expected = getattr(model, name)(points[:3000])
+            assert type(got) is type(expected), name
+            for a, b in zip(got, expected) if isinstance(expected, tuple) else [(got, expected)]:
+                np.testing.assert_array_equal(a, b, err_msg=name)
     np.testing.assert_array_equal(w, model.winding_number(points))
