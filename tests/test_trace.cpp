@@ -95,13 +95,17 @@ TEST(TraceReference, AgreesWithTheLibraryAndClosedForms) {
     const dvec3 g = reference::reference_gradient(ref, dvec3(x));
     EXPECT_NEAR(w, e.w, 1e-12);  // both double sums of the same terms
     EXPECT_LE(glm::length(g - e.gradient), 1e-9 * (1.0 + glm::length(g)));
+    // The steps spelled out: GCC 12.2 at -O3 (its -fipa-cp-clone) compiled `dvec3 step(0.0);
+    // step[k] = h;` in this loop into a step along z for k = 0 and along x for k = 2 (a cmovne of
+    // the wrong sense, read in the object code) once reference_w was out of line.
     const double h = 1e-6;
-    dvec3 fd;
-    for (int k = 0; k < 3; ++k) {
-      dvec3 step(0.0);
-      step[k] = h;
-      fd[k] = (reference::reference_w(ref, dvec3(x) + step) - reference::reference_w(ref, dvec3(x) - step)) / (2 * h);
-    }
+    const dvec3 steps[3] = {{h, 0.0, 0.0}, {0.0, h, 0.0}, {0.0, 0.0, h}};
+    double fd_along[3];
+    for (int k = 0; k < 3; ++k)
+      fd_along[k] =
+          (reference::reference_w(ref, dvec3(x) + steps[k]) - reference::reference_w(ref, dvec3(x) - steps[k])) /
+          (2 * h);
+    const dvec3 fd(fd_along[0], fd_along[1], fd_along[2]);
     // O(h²) truncation and 1e-16/h cancellation, away from the mesh (points within 1e-3 of it
     // are rare and may straddle it: skipped).
     if (std::fabs(x.z) > 1e-3f) {

@@ -31,38 +31,10 @@ inline ReferenceMesh reference_mesh(const Mesh& m) {
   return r;
 }
 
-// w(x) = Σ Ω_i / 4π; Ω of one triangle is 2·atan2(a·(b×c), |a||b||c| + (a·b)|c| + (b·c)|a| + (c·a)|b|)
-// with a, b, c its corners relative to x: positive behind the normal (b-a)×(c-a), so w = 1 inside
-// a closed outward-oriented mesh.
-inline double reference_w(const ReferenceMesh& r, const dvec3& x) {
-  double omega = 0;
-  for (size_t i = 0; i < r.corners.size(); i += 3) {
-    const dvec3 a = r.corners[i] - x, b = r.corners[i + 1] - x, c = r.corners[i + 2] - x;
-    const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
-    const double num = glm::dot(a, glm::cross(b, c));
-    const double den = la * lb * lc + glm::dot(a, b) * lc + glm::dot(b, c) * la + glm::dot(c, a) * lb;
-    omega += 2.0 * std::atan2(num, den);
-  }
-  return omega / (4.0 * kPi);
-}
+// w(x) = Σ Ω_i / 4π over every triangle, in double (brute_force_winding.cpp).
+double reference_w(const ReferenceMesh& r, const dvec3& x);
 
-// ∇w(x) off the mesh: each directed edge a→b of each triangle (relative to x) contributes
-// (a×b)(|a|+|b|) / (|a||b|(|a||b| + a·b)) to ∇Ω (the Biot–Savart field of the boundary loop).
-inline dvec3 reference_gradient(const ReferenceMesh& r, const dvec3& x) {
-  dvec3 g(0.0);
-  auto edge = [&](const dvec3& a, const dvec3& b) {
-    const double la = glm::length(a), lb = glm::length(b);
-    const double den = la * lb * (la * lb + glm::dot(a, b));
-    if (!(den > 0)) return;  // x on the edge's line, outside the segment: no contribution in the limit
-    g += glm::cross(a, b) * ((la + lb) / den);
-  };
-  for (size_t i = 0; i < r.corners.size(); i += 3) {
-    const dvec3 a = r.corners[i] - x, b = r.corners[i + 1] - x, c = r.corners[i + 2] - x;
-    edge(a, b);
-    edge(b, c);
-    edge(c, a);
-  }
-  return g / (4.0 * kPi);
-}
+// ∇w(x) off the mesh, in double: the Biot–Savart field of every triangle's boundary loop.
+dvec3 reference_gradient(const ReferenceMesh& r, const dvec3& x);
 
 }  // namespace gwnrt::reference
