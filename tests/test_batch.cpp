@@ -193,6 +193,37 @@ TEST_P(BatchOnRealMeshes, ColumnsHoldThePointResultsFields) {
   EXPECT_NE(refused.message().find("point 5"), std::string::npos) << refused.message();
 }
 
+// for_each_point_column (the CUDA backend sizes and copies the device columns by it) names every
+// member of PointColumns once, each with as many values a row as store_point_result writes:
+// columns of 3 rows filled with 0xAB, row 1 stored from a result none of whose bytes is 0xAB,
+// must be written whole in row 1 and untouched in rows 0 and 2.
+TEST(PointColumnsTable, VisitsEveryColumnWithTheValuesARowHolds) {
+  PointResult r;
+  r.w = r.unsigned_distance = r.bary_u = r.bary_v = r.boundary_distance = r.harnack_bound = 1.0f;
+  r.gradient = r.projection.point = vec3(1.0f);
+  r.hessian = sym3{1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+  r.nearest_triangle = r.nearest_boundary_segment = r.sdf.sheet_triangle = r.projection.iterations = 1;
+  r.sdf.distance = r.sdf.first_order = r.sdf.second_order = r.sdf.sheet_distance = r.projection.residual = 1.0f;
+  r.sdf.piece = DistancePiece(1);
+  r.projection.converged = true;
+  constexpr unsigned char kUnwritten = 0xAB;
+  test::AllPointColumns all(3, kUnwritten);
+  std::vector<const void*> seen;
+  for_each_point_column(all.columns, [&](auto*& column, size_t) { seen.push_back(&column); });
+  ASSERT_EQ(seen.size(), sizeof(PointColumns) / sizeof(void*));
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(std::adjacent_find(seen.begin(), seen.end()), seen.end()) << "a member visited twice";
+  store_point_result(all.columns, 1, r);
+  for (size_t k = 0; k < all.bytes.size(); ++k) {
+    const std::vector<unsigned char>& bytes = all.bytes[k];
+    const size_t row = all.row_bytes[k];
+    for (size_t b = 0; b < bytes.size(); ++b) {
+      const bool in_row_1 = b >= row && b < 2 * row;
+      ASSERT_EQ(bytes[b] != kUnwritten, in_row_1) << "column " << k << " (" << row << " bytes a row), byte " << b;
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Meshes, BatchOnRealMeshes, ::testing::Values("teapot.obj", "bunny_holes.obj"),
                          [](const auto& info) {
                            std::string name = info.param;

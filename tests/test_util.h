@@ -186,4 +186,23 @@ inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t s
   return point_mix(box, count, seed);
 }
 
+// Every column of a PointColumns, each of `rows` rows with its bytes set to `fill`: for tests that
+// compare whole columns. `row_bytes` and `bytes` are in for_each_point_column's order.
+struct AllPointColumns {
+  PointColumns columns;
+  std::vector<size_t> row_bytes;
+  std::vector<std::vector<unsigned char>> bytes;
+
+  AllPointColumns(size_t rows, unsigned char fill) {
+    for_each_point_column(columns, [&](auto*& column, size_t values) {
+      using T = std::remove_reference_t<decltype(*column)>;
+      row_bytes.push_back(values * sizeof(T));
+      bytes.emplace_back(rows * row_bytes.back(), fill);
+      column = reinterpret_cast<T*>(bytes.back().data());  // vector storage: aligned for any T
+    });
+  }
+  AllPointColumns(const AllPointColumns&) = delete;
+  AllPointColumns& operator=(const AllPointColumns&) = delete;
+};
+
 }  // namespace gwnrt::test

@@ -56,14 +56,23 @@ double sheet_seconds(const Mesh& mesh, WindingMethod method) {
 // A backend's evaluate_points: the CPU's on the model, or the GPU's on its upload.
 using Evaluate = std::function<Status(std::span<const vec3>, const QueryRequest&, std::span<PointResult>)>;
 
-double time_batch(const Evaluate& evaluate, const std::vector<vec3>& points, const QueryRequest& request,
-                  std::vector<PointResult>& results) {
-  results.resize(points.size());
+// The same into columns (evaluate_points_to_columns, the Python module's path).
+using EvaluateColumns = std::function<Status(std::span<const vec3>, const QueryRequest&, const PointColumns&)>;
+
+// Seconds run() takes; dies on its failure.
+template <class Run>
+double seconds_of(Run&& run) {
   const auto t0 = clock_type::now();
-  const Status s = evaluate(points, request, results);
+  const Status s = run();
   const double sec = std::chrono::duration<double>(clock_type::now() - t0).count();
   if (!s.ok()) examples::die(kProgram, s.message());
   return sec;
+}
+
+double time_batch(const Evaluate& evaluate, const std::vector<vec3>& points, const QueryRequest& request,
+                  std::vector<PointResult>& results) {
+  results.resize(points.size());
+  return seconds_of([&] { return evaluate(points, request, results); });
 }
 
 // Where a Taylor query's time goes: the lanes the traversal expands and the triangles it sums
@@ -113,9 +122,9 @@ int main(int argc, char** argv) {
   if (Status s = examples::choose_device(kProgram, device, use_cuda); !s.ok())
     return examples::fail(kProgram, s.message());
 
-  // Checked before the mesh is loaded: the points, their subset for the brute force, and the two
-  // result arrays.
-  if (Status s = check_memory(saturating_product(count, 2 * sizeof(vec3) + 2 * sizeof(PointResult)),
+  // Checked before the mesh is loaded: the points, their subset for the brute force, the two
+  // result arrays and the w column.
+  if (Status s = check_memory(saturating_product(count, 2 * sizeof(vec3) + 2 * sizeof(PointResult) + sizeof(float)),
                               "--points " + std::to_string(count));
       !s.ok())
     return examples::fail(kProgram, s.message());
@@ -137,9 +146,12 @@ int main(int argc, char** argv) {
   }
   // A row's throughput over its baseline mode's; NaN without one (the brute force's row is its
   // own yardstick).
+  // An equal name first: "w, crossing, into a column" begins with "w, crossing,".
   auto baseline_ratio = [&](const std::string& mode, double rate) -> double {
     for (const auto& [name, base_rate] : baseline)
-      if (mode == name || (mode.rfind(name + ",", 0) == 0)) return rate / base_rate;
+      if (mode == name) return rate / base_rate;
+    for (const auto& [name, base_rate] : baseline)
+      if (mode.rfind(name + ",", 0) == 0) return rate / base_rate;
     return NAN;
   };
   const examples::ThreadLimit limit(threads);
@@ -183,6 +195,9 @@ int main(int argc, char** argv) {
     return evaluate_points(model, p, q, r);
   };
   Evaluate evaluate = on_cpu;
+  EvaluateColumns evaluate_columns = [&](std::span<const vec3> p, const QueryRequest& q, const PointColumns& c) {
+    return evaluate_points_to_columns(model, p, q, c);
+  };
 #if defined(GWNRT_HAVE_CUDA)
   cuda::BatchTimings device_timings;
   cuda::DeviceModel device_model;
@@ -192,6 +207,9 @@ int main(int argc, char** argv) {
       return examples::fail(kProgram, s.message());
     evaluate = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
       return cuda::evaluate_points(device_model, p, q, r, nullptr, &device_timings);
+    };
+    evaluate_columns = [&](std::span<const vec3> p, const QueryRequest& q, const PointColumns& c) {
+      return cuda::evaluate_points_to_columns(device_model, p, q, c, nullptr, &device_timings);
     };
     // The first launch pays for the context and the scratch: not in any mode's time.
     std::vector<PointResult> warm(points.size());
@@ -223,14 +241,19 @@ int main(int argc, char** argv) {
     WindingMethod method;
     int order;
     uint32_t fields;
+    bool w_column = false;  // w written into a float column alone (evaluate_points_to_columns)
   };
   constexpr uint32_t kAllDerivatives = kFieldW | kFieldGradient | kFieldHessian;
+  // The two "into a column" modes write 4 bytes a point, not a 116-byte PointResult (on the GPU,
+  // none is copied down either): the Python module's path.
   const Mode modes[] = {{"w, Taylor order 0", WindingMethod::kTaylor, 0, kFieldW},
                         {"w, Taylor order 1", WindingMethod::kTaylor, 1, kFieldW},
                         {"w, Taylor order 2", WindingMethod::kTaylor, 2, kFieldW},
+                        {"w, Taylor order 2, into a column", WindingMethod::kTaylor, 2, kFieldW, true},
                         {"w + grad, order 2", WindingMethod::kTaylor, 2, kFieldW | kFieldGradient},
                         {"w + grad + Hessian, order 2", WindingMethod::kTaylor, 2, kAllDerivatives},
                         {"w, crossing", WindingMethod::kCrossing, 2, kFieldW},
+                        {"w, crossing, into a column", WindingMethod::kCrossing, 2, kFieldW, true},
                         {"w + grad + Hessian, crossing", WindingMethod::kCrossing, 2, kAllDerivatives},
                         {"unsigned distance", WindingMethod::kAuto, 2, kFieldUnsignedDistance},
                         {"boundary distance", WindingMethod::kAuto, 2, kFieldBoundaryDistance},
@@ -239,13 +262,22 @@ int main(int argc, char** argv) {
                         {"sheet distance", WindingMethod::kAuto, 2, kFieldSheetDistance},
                         {"Harnack lower bound", WindingMethod::kAuto, 2, kFieldHarnackBound},
                         {"Newton projection, auto", WindingMethod::kAuto, 2, kFieldProjection}};
+  std::vector<float> w_column;
   for (const Mode& m : modes) {
     if (!only.empty() && std::string(m.name).find(only) == std::string::npos) continue;
     QueryRequest request;
     request.method = m.method;
     request.taylor = {m.order, beta};
     request.fields = m.fields;
-    const double sec = time_batch(evaluate, points, request, results);
+    double sec = 0;
+    if (m.w_column) {
+      w_column.assign(points.size(), 0.0f);
+      PointColumns columns;
+      columns.w = w_column.data();
+      sec = seconds_of([&] { return evaluate_columns(points, request, columns); });
+    } else {
+      sec = time_batch(evaluate, points, request, results);
+    }
     Row row{m.name, points.size(), sec};
 #if defined(GWNRT_HAVE_CUDA)
     if (use_cuda) row.kernel_seconds = device_timings.kernel;
@@ -253,7 +285,8 @@ int main(int argc, char** argv) {
     if (m.fields & kFieldW) {
       row.max_error = 0;
       for (size_t i = 0; i < brute_n; ++i)
-        row.max_error = std::max(row.max_error, double(std::abs(results[i].w - reference[i].w)));
+        row.max_error =
+            std::max(row.max_error, double(std::abs((m.w_column ? w_column[i] : results[i].w) - reference[i].w)));
     }
     rows.push_back(row);
   }

@@ -7,9 +7,6 @@
 #include <string>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include "gwnrt/batch.h"
 #include "python_model.h"
 
@@ -139,12 +136,7 @@ Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points,
   return guard_status("evaluate_points (cuda)", [&] {
     const cuda::DeviceModel* device = nullptr;
     if (Status s = p.device_model(device); !s.ok()) return s;
-    std::vector<PointResult> results(points.size());
-    if (Status s = cuda::evaluate_points(*device, points, request, results); !s.ok()) return s;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, results.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) store_point_result(columns, i, results[i]);
-    });
-    return Status::Ok();
+    return cuda::evaluate_points_to_columns(*device, points, request, columns);
   });
 #else
   return {StatusCode::kUnavailable, "no CUDA backend"};  // use_cuda refused it already

@@ -3,6 +3,7 @@
 // so the tolerances are a few float ulps scaled by each quantity's magnitude.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "../test_util.h"
@@ -97,6 +98,44 @@ TEST_P(CudaQueries, SignedDistanceMatchesTheCpuBackend) {
   // iteration apart, about 1e-4 / |∇w| from each other.
   EXPECT_LT(max_projection, 1e-3);
   EXPECT_LT(max_bound, 1e-4);
+}
+
+// The columns variant (the Python module's device path) runs the same evaluate_point on the same
+// device as evaluate_points, only storing differently: every column must equal, bit for bit, what
+// the CPU's store_point_result makes of the GPU's PointResults, over batches that grow the scratch.
+TEST_P(CudaQueries, ColumnsHoldTheDevicesPointResults) {
+  const GwnModel model = test::build_model(test::load_test_mesh(GetParam()));
+  cuda::DeviceModel device;
+  ASSERT_TRUE(cuda::DeviceModel::upload(model, device).ok());
+  constexpr uint32_t kEveryField = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance |
+                                   kFieldBoundaryDistance | kFieldSignedDistance | kFieldPseudoDistance |
+                                   kFieldSheetDistance | kFieldProjection | kFieldHarnackBound;
+  for (const uint32_t fields : {uint32_t(kFieldW), kEveryField}) {
+    for (const size_t count : {size_t(20000), size_t(7), size_t(50000)}) {
+      const auto points = test::sample_points(test::mesh_bounds(model.mesh()), count, uint32_t(count) + 5);
+      QueryRequest request;
+      request.fields = fields;
+      std::vector<PointResult> results(count);
+      ASSERT_TRUE(cuda::evaluate_points(device, points, request, results).ok());
+      test::AllPointColumns expected(count, 0xAB), columns(count, 0xCD);
+      for (size_t i = 0; i < count; ++i) store_point_result(expected.columns, i, results[i]);
+      cuda::BatchTimings timings;
+      const Status s = cuda::evaluate_points_to_columns(device, points, request, columns.columns, nullptr, &timings);
+      ASSERT_TRUE(s.ok()) << s.message();
+      EXPECT_GT(timings.kernel, 0.0);
+      for (size_t k = 0; k < columns.bytes.size(); ++k)
+        EXPECT_TRUE(columns.bytes[k] == expected.bytes[k]) << "column " << k << ", " << count << " points";
+    }
+  }
+  // The same refusals as evaluate_points.
+  std::vector<vec3> bad = test::sample_points(test::mesh_bounds(model.mesh()), 10, 1);
+  bad[5].y = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> w(bad.size());
+  PointColumns just_w;
+  just_w.w = w.data();
+  const Status refused = cuda::evaluate_points_to_columns(device, bad, QueryRequest{}, just_w);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("point 5"), std::string::npos) << refused.message();
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, CudaQueries, ::testing::Values("bunny.obj", "bunny_holes.obj", "teapot.obj"));

@@ -11,6 +11,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/meshing/extract_surface.h"
+#include "gwnrt/sdf/point_columns.h"
 
 struct CUstream_st;  // cudaStream_t is a CUstream_st*: streams pass without CUDA's headers
 
@@ -21,7 +22,7 @@ using Stream = CUstream_st*;
 
 // Where a batch's time went on the device, from CUDA events (seconds): its inputs copied up, the
 // kernel, its results copied down (a PointResult is 116 bytes: for w alone the copy down can
-// outlast the kernel).
+// outlast the kernel; evaluate_points_to_columns copies only the columns asked for).
 struct BatchTimings {
   double upload = 0, kernel = 0, download = 0;
 };
@@ -59,6 +60,13 @@ Status trace_rays(const DeviceModel& model, std::span<const Ray> rays, const Tra
 // GPU counterpart of gwnrt::evaluate_points; results in input order.
 Status evaluate_points(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
                        std::span<PointResult> results, Stream stream = nullptr, BatchTimings* timings = nullptr);
+
+// GPU counterpart of gwnrt::evaluate_points_to_columns: each point's result written on the device
+// into the given columns only, which alone are copied down (w alone: 4 bytes a point, not a
+// PointResult's 116). The columns are host memory of points.size() rows each.
+Status evaluate_points_to_columns(const DeviceModel& model, std::span<const vec3> points, const QueryRequest& request,
+                                  const PointColumns& columns, Stream stream = nullptr,
+                                  BatchTimings* timings = nullptr);
 
 // GPU counterpart of gwnrt::extract_surface: the same driver and passes on the CUDA backend
 // (scans and compaction with CUB). `model` is the host model `device` was uploaded from (the

@@ -35,6 +35,33 @@ struct PointColumns {
   float* harnack_bound = nullptr;
 };
 
+// Every column of `c`, given or not, as visit(pointer, values a row): for callers that handle the
+// columns as whole arrays (the CUDA backend allocates the given ones on the device and copies them
+// down). The member list above, once more: keep the two in step.
+template <class Columns, class Visit>
+void for_each_point_column(Columns& c, Visit&& visit) {
+  visit(c.w, 1);
+  visit(c.gradient, 3);
+  visit(c.hessian, 9);
+  visit(c.unsigned_distance, 1);
+  visit(c.nearest_triangle, 1);
+  visit(c.barycentrics, 2);
+  visit(c.boundary_distance, 1);
+  visit(c.nearest_boundary_segment, 1);
+  visit(c.sdf, 1);
+  visit(c.sdf1, 1);
+  visit(c.sdf2, 1);
+  visit(c.sheet_distance, 1);
+  visit(c.sheet_triangle, 1);
+  visit(c.sdf_piece, 1);
+  visit(c.projection, 3);
+  visit(c.projection_iterations, 1);
+  visit(c.projection_converged, 1);
+  visit(c.projection_residual, 1);
+  visit(c.harnack_bound, 1);
+}
+static_assert(sizeof(PointColumns) == 19 * sizeof(void*), "a member added to PointColumns: add it above too");
+
 GWNRT_HD inline void store_vec3(float* column, size_t i, const vec3& v) {
   column[3 * i] = v.x;
   column[3 * i + 1] = v.y;
