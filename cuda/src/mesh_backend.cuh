@@ -46,7 +46,11 @@ class DeviceArray {
  public:
   void resize(uint64_t n) {
     if (Status s = buffer_.allocate(n); !s.ok()) throw DeviceFailure(s);
-    if (n) check_device(cudaMemset(buffer_.get(), 0, n * sizeof(T)), "cudaMemset");
+    if (n == 0) return;
+    check_device(cudaMemset(buffer_.get(), 0, n * sizeof(T)), "cudaMemset");
+    // The fill runs on the legacy default stream, which a stream made non-blocking does not wait
+    // for: the driver's next kernel, on the backend's stream, must not start before it ends.
+    check_device(cudaStreamSynchronize(cudaStreamLegacy), "cudaMemset");
   }
   T* data() const { return buffer_.get(); }
   uint64_t size() const { return buffer_.size(); }

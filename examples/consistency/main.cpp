@@ -28,6 +28,7 @@
 #include "cli_checks.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/meshing/extract_surface.h"
+#include "gwnrt/meshing/mesh_comparison.h"
 #include "integrators/first_hit_pixel.h"
 #include "load_model.h"
 #include "point_io.h"
@@ -151,14 +152,13 @@ class Comparison {
       rows[1].add(x.kind != y.kind);
       if (x.kind != y.kind) continue;
       const double dt = std::abs(double(x.t) - double(y.t)) * glm::length(rays[i].direction);
-      // A sheet hit to round-off (1e-6 of the diagonal); a smooth one within a few stopping
-      // distances along the ray, ε / |cos| for a ray meeting the level at an angle (grazing rays
-      // left out).
+      // A sheet hit to round-off (1e-6 of the diagonal, over |cos|: the crossing of a triangle
+      // met at an angle moves along the ray by its rounding across it over the cosine); a smooth
+      // one within a few stopping distances along the ray, ε / |cos| likewise. Grazing rays are
+      // left out (with the sheets' round-off unscaled, 5 of the teapot's 5410 sheet hits were
+      // beyond it with and without fused multiply-adds on the CPU, all grazing).
       const double cosine = std::abs(double(glm::dot(x.normal, glm::normalize(rays[i].direction))));
-      if (x.kind == HitKind::kSheet)
-        rows[2].add(dt / (1e-6 * diagonal));
-      else if (cosine > 0.05)
-        rows[2].add(dt * cosine / (4.0 * eps));
+      if (cosine > 0.05) rows[2].add(dt * cosine / (x.kind == HitKind::kSheet ? 1e-6 * diagonal : 4.0 * eps));
       // The angle between unit normals from their chord (acos of a dot product near 1 is off by
       // 7e-4 rad for identical floats).
       rows[3].add(2.0 * std::asin(std::min(1.0, 0.5 * double(glm::length(x.normal - y.normal)))));
@@ -173,14 +173,20 @@ class Comparison {
     Timed t;
     if (Status s = timed(t.cpu, [&] { return a_.mesh(options, ma, sa); }); !s.ok()) return named("meshing", s);
     if (Status s = timed(t.gpu, [&] { return b_.mesh(options, mb, sb); }); !s.ok()) return named("meshing", s);
+    // Vertices to 2e-3 of a cell: rounding alone (the CPU code with and without fused multiply-
+    // adds) moved the worst by up to 4e-4 cells and a few percent by more than the 1e-5
+    // (tests/cuda/test_cuda_meshing.cpp); the max and mean columns say how close they came.
     std::vector<Row> rows = {{mesh_, "mesh vertex count", "vertices", 0.0},
                              {mesh_, "mesh triangle count", "triangles", 0.0},
                              {mesh_, "mesh triangles", "0/1", 0.0},
-                             {mesh_, "mesh vertex offset", "cells", 1e-5}};
+                             {mesh_, "mesh vertex offset", "cells", 2e-3}};
     rows[0].add(std::abs(double(ma.positions.size()) - double(mb.positions.size())));
     rows[1].add(std::abs(double(ma.triangles.size()) - double(mb.triangles.size())));
     if (ma.positions.size() == mb.positions.size() && ma.triangles.size() == mb.triangles.size()) {
-      for (size_t i = 0; i < ma.triangles.size(); ++i) rows[2].add(ma.triangles[i] != mb.triangles[i]);
+      // A quad split along its other diagonal (a near tie that rounding decides) is the same mesh.
+      const TriangleComparison c = compare_triangles(ma.triangles, mb.triangles);
+      for (size_t i = 0; i < c.same + 2 * c.resplit; ++i) rows[2].add(0.0);
+      for (size_t i = 0; i < c.different; ++i) rows[2].add(1.0);
       for (size_t i = 0; i < ma.positions.size(); ++i)
         rows[3].add(glm::length(ma.positions[i] - mb.positions[i]) / sa.cell_size);
     }

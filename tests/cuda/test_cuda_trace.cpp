@@ -52,7 +52,7 @@ TEST_P(CudaTrace, MatchesTheCpuBackend) {
   ASSERT_TRUE(s.ok()) << s.message();
 
   const double eps = double(options.epsilon) * diag;
-  size_t hit_disagree = 0, both_hit = 0, smooth = 0;
+  size_t hit_disagree = 0, both_hit = 0, smooth = 0, turned = 0;
   double max_sheet_dt = 0, max_smooth_dt = 0, max_angle = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
     EXPECT_FALSE(gpu[i].invalid);
@@ -64,28 +64,36 @@ TEST_P(CudaTrace, MatchesTheCpuBackend) {
     ++both_hit;
     ASSERT_EQ(cpu[i].kind, gpu[i].kind) << "ray " << i;
     const double dt = std::abs(double(cpu[i].t) - double(gpu[i].t));  // unit directions
+    // Along a ray that meets the surface at an angle (n · d = cos), a difference across it shows
+    // as that over |cos| in t; grazing rays are left out.
+    const double cosine = std::abs(double(glm::dot(cpu[i].normal, rays[i].direction)));
     if (cpu[i].kind == HitKind::kSheet) {
       EXPECT_EQ(cpu[i].triangle, gpu[i].triangle) << "ray " << i;
-      max_sheet_dt = std::max(max_sheet_dt, dt / diag);
+      // Round-off of one triangle crossing (the CPU with and without fused multiply-adds: up to
+      // 5.6e-6 of the diagonal unscaled, at |cos| 0.008 to 0.06).
+      if (cosine > 0.05) max_sheet_dt = std::max(max_sheet_dt, dt * cosine / diag);
     } else {
-      // Both stopped within about ε|∇w| of the level in w, so within ε / |cos| in t along a ray
-      // that meets the level at an angle (n · d = cos); grazing rays are left out.
+      // Both stopped within about ε|∇w| of the level in w, so within ε / |cos| in t.
       ++smooth;
-      const double cosine = std::abs(double(glm::dot(cpu[i].normal, rays[i].direction)));
       if (cosine > 0.05) max_smooth_dt = std::max(max_smooth_dt, dt * cosine / eps);
     }
-    const double cosine = std::clamp(double(glm::dot(cpu[i].normal, gpu[i].normal)), -1.0, 1.0);
-    max_angle = std::max(max_angle, std::acos(cosine));
+    // The angle between unit normals from their chord (acos near 1 loses 7e-4 rad to rounding).
+    const double angle = 2.0 * std::asin(std::min(1.0, 0.5 * double(glm::length(cpu[i].normal - gpu[i].normal))));
+    max_angle = std::max(max_angle, angle);
+    turned += angle > 1e-2;
   }
   std::printf(
-      "[ %s ] %zu rays: %zu hit/miss disagreements, %zu both hit (%zu smooth); max |dt|: sheets %.3g diag, "
-      "smooth %.3g stopping distances (times the cosine); max normal angle %.3g rad\n",
-      GetParam().mesh, rays.size(), hit_disagree, both_hit, smooth, max_sheet_dt, max_smooth_dt, max_angle);
+      "[ %s ] %zu rays: %zu hit/miss disagreements, %zu both hit (%zu smooth); max |dt| times the cosine: "
+      "sheets %.3g diag, smooth %.3g stopping distances; max normal angle %.3g rad (%zu beyond 1e-2)\n",
+      GetParam().mesh, rays.size(), hit_disagree, both_hit, smooth, max_sheet_dt, max_smooth_dt, max_angle, turned);
   EXPECT_LE(hit_disagree, rays.size() / 1000);
   EXPECT_GT(both_hit, rays.size() / 50);  // the comparison says something
   EXPECT_LE(max_sheet_dt, 1e-6);          // float round-off of one crossing
   EXPECT_LE(max_smooth_dt, 4.0);
-  EXPECT_LE(max_angle, 1e-2);
+  // Normals to 1e-2 rad but for one ray in a thousand: a smooth normal is ∇w at the stopping
+  // point, which turns fast near ∂M (bunny_holes in solid-angle mode: one ray of 57600 at 0.0129
+  // rad with and without fused multiply-adds on the CPU).
+  EXPECT_LE(turned, both_hit / 1000) << "max normal angle " << max_angle;
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, CudaTrace,
