@@ -4,8 +4,8 @@
 // provides Array<T> (resize, which need not keep the contents but zero-fills, data, size, move),
 // parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total, to_host(array, i)
 // for the few values the driver reads back, and move_out(array, std::vector&) for the output.
-// Every function the driver hands to parallel_for is GWNRT_HD; it never touches host memory
-// from inside one (the output is moved out whole).
+// Every function the driver hands to parallel_for is a GWNRT_HD functor or a GWNRT_PASS lambda
+// (hd.h); it never touches host memory from inside one (the output is moved out whole).
 #pragma once
 
 #include <algorithm>
@@ -79,13 +79,13 @@ uint64_t compact(Backend& backend, const T* in, uint64_t n, Keep keep, Out& out)
   flag.resize(n);
   offset.resize(n);
   uint32_t* f = flag.data();
-  backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) { f[i] = keep(i) ? 1u : 0u; });
+  backend.parallel_for(n, [=] GWNRT_PASS(uint64_t i) { f[i] = keep(i) ? 1u : 0u; });
   const uint64_t total = backend.exclusive_scan(f, n, offset.data());
   out.resize(total);
   if (total == 0) return 0;
   const uint32_t* o = offset.data();
   T* dst = out.data();
-  backend.parallel_for(n, [=] GWNRT_HD(uint64_t i) {
+  backend.parallel_for(n, [=] GWNRT_PASS(uint64_t i) {
     if (f[i]) dst[o[i]] = in[i];
   });
   return total;
@@ -132,7 +132,7 @@ Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t
     normals.resize(edge_total);
     const HermitePoint* h = hermite.data();
     vec3 *p = positions.data(), *n = normals.data();
-    backend.parallel_for(edge_total, [=] GWNRT_HD(uint64_t i) {
+    backend.parallel_for(edge_total, [=] GWNRT_PASS(uint64_t i) {
       p[i] = h[i].point;
       n[i] = h[i].normal;
     });
@@ -143,7 +143,7 @@ Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t
   const uvec3* t = triangles.data();
   typename Backend::template Array<uvec3> kept_triangles;
   const uint64_t kept = detail::compact(
-      backend, t, face_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
+      backend, t, face_total, [=] GWNRT_PASS(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
   backend.move_out(kept_triangles, out.triangles);
   stats.open_edges = face_total - kept;
   stats.seconds.output = clock.lap();
@@ -169,7 +169,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
     const int32_t n[3] = {(grid.cells[0] + size) / size, (grid.cells[1] + size) / size, (grid.cells[2] + size) / size};
     candidates.resize(uint64_t(n[0]) * n[1] * n[2]);
     GridCoord* c = candidates.data();
-    backend.parallel_for(candidates.size(), [=] GWNRT_HD(uint64_t i) {
+    backend.parallel_for(candidates.size(), [=] GWNRT_PASS(uint64_t i) {
       c[i] = {int32_t(i % n[0]), int32_t((i / n[0]) % n[1]), int32_t(i / (uint64_t(n[0]) * n[1]))};
     });
   }
@@ -178,7 +178,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
     const GridCoord* c = candidates.data();
     const uint64_t count = detail::compact(
         backend, c, candidates.size(),
-        [=] GWNRT_HD(uint64_t i) {
+        [=] GWNRT_PASS(uint64_t i) {
           const GridCoord b = c[i];
           if (!(b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2]))
             return false;
@@ -193,7 +193,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
     candidates.resize(count * 8);
     const GridCoord* src = kept.data();
     GridCoord* children = candidates.data();
-    backend.parallel_for(count * 8, [=] GWNRT_HD(uint64_t i) {
+    backend.parallel_for(count * 8, [=] GWNRT_PASS(uint64_t i) {
       const GridCoord b = src[i / 8];
       const int d = int(i % 8);
       children[i] = {2 * b.x + (d & 1), 2 * b.y + ((d >> 1) & 1), 2 * b.z + ((d >> 2) & 1)};
@@ -215,7 +215,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   {
     uint32_t* needed = needed_dense.data();
     const GridCoord* b = kept.data();
-    backend.parallel_for(kept.size(), [=] GWNRT_HD(uint64_t i) {
+    backend.parallel_for(kept.size(), [=] GWNRT_PASS(uint64_t i) {
       for (int d = 0; d < 8; ++d) {
         const GridCoord t{b[i].x + (d & 1), b[i].y + ((d >> 1) & 1), b[i].z + ((d >> 2) & 1)};
         if (t.x < grid.blocks[0] && t.y < grid.blocks[1] && t.z < grid.blocks[2])
@@ -228,7 +228,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   {
     const uint32_t* needed = needed_dense.data();
     uint32_t* f = is_slot.data();
-    backend.parallel_for(block_count, [=] GWNRT_HD(uint64_t i) { f[i] = needed[i] != 0; });
+    backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, slot_of_block.data());
   // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
@@ -240,7 +240,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   {
     const uint32_t *f = is_slot.data(), *needed = needed_dense.data();
     uint32_t *map = slot_of_block.data(), *bos = block_of_slot.data(), *nf = needed_from.data();
-    backend.parallel_for(block_count, [=] GWNRT_HD(uint64_t i) {
+    backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) {
       if (f[i]) {
         bos[map[i]] = uint32_t(i);
         nf[map[i]] = needed[i];
@@ -360,7 +360,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   const uvec3* t = triangles.data();
   typename Backend::template Array<uvec3> kept_triangles;
   const uint64_t face_total = detail::compact(
-      backend, t, 2 * edge_total, [=] GWNRT_HD(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
+      backend, t, 2 * edge_total, [=] GWNRT_PASS(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
   backend.move_out(kept_triangles, out.triangles);
   stats.open_edges = (2 * edge_total - face_total) / 2;
   stats.seconds.output = clock.lap();
