@@ -791,7 +791,12 @@ TEST(Meshing, BadOptionsAreRefusedWithTheReason) {
   s = extract_surface(model, o, out);
   EXPECT_EQ(s.code(), StatusCode::kOutOfMemory);
   EXPECT_NE(s.message().find("needs at least"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("beyond the memory budget of 1.0 MiB"), std::string::npos) << s.message();
   EXPECT_TRUE(out.positions.empty() && out.triangles.empty());
+  // A budget below a MiB is said as it is (it was rounded up to "1 MiB", as was what it needs).
+  o.memory_budget = 1000;
+  s = extract_surface(model, o, out);
+  EXPECT_NE(s.message().find("beyond the memory budget of 1000 B"), std::string::npos) << s.message();
 }
 
 TEST(Meshing, EmptySurfaceGivesAnEmptyMeshAndSaysSo) {

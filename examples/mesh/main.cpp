@@ -116,8 +116,8 @@ void print_report(const nlohmann::json& j) {
       double(s["total"]), double(s["scout"]), double(s["corners"]), double(s["edges"]), double(s["vertices"]),
       double(s["faces"]), double(s["smoothing"]), double(s["output"]), double(s["report"]));
   std::printf("memory: pipeline arrays %s, process peak %s\n",
-              gwnrt::byte_size_text(uint64_t(j["memory"]["pipeline_bytes"])).c_str(),
-              gwnrt::byte_size_text(uint64_t(j["memory"]["peak_resident_bytes"])).c_str());
+              gwnrt::memory_size_text(uint64_t(j["memory"]["pipeline_bytes"])).c_str(),
+              gwnrt::memory_size_text(uint64_t(j["memory"]["peak_resident_bytes"])).c_str());
 }
 
 }  // namespace
@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
                  kProgram, t.scout, t.corners, (unsigned long long)stats.evaluated_blocks, t.edges,
                  (unsigned long long)stats.crossing_edges, (unsigned long long)stats.sheet_edges,
                  (unsigned long long)stats.smooth_edges, t.vertices, t.faces, t.smoothing, t.output,
-                 gwnrt::byte_size_text(stats.bytes).c_str());
+                 gwnrt::memory_size_text(stats.bytes).c_str());
   }
   if (report || !report_json_path.empty()) {
     gwnrt::MeshQualityReport quality;

@@ -71,14 +71,6 @@ struct MeshingStats {
   std::string message;  // e.g. why the mesh is empty
 };
 
-// "1.5 GiB", "312 MiB": sizes in the mesher's messages.
-inline std::string byte_size_text(uint64_t bytes) {
-  const double gib = double(bytes) / double(uint64_t(1) << 30);
-  if (gib >= 1.0)
-    return std::to_string(int(gib * 10 + 0.5) / 10) + "." + std::to_string(int(gib * 10 + 0.5) % 10) + " GiB";
-  return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB";
-}
-
 // Meshes S for the options. An empty S (no corner inside, or all inside) gives an empty mesh, a
 // success and stats->message saying so. Fails on a resolution of 0, a cell size that is not
 // finite and > 0, a grid beyond the memory budget (saying what it would need), a level that is

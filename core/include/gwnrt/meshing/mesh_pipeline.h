@@ -14,6 +14,7 @@
 #include <string>
 
 #include "gwnrt/geometry/model.h"
+#include "gwnrt/io/memory.h"
 #include "gwnrt/meshing/dual_contouring.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/trace/march_regions.h"
@@ -57,8 +58,8 @@ class MemoryBudget {
     if (live_ > budget_)
       return {StatusCode::kOutOfMemory, std::string("meshing at ") + std::to_string(grid_.cells[0]) + "x" +
                                             std::to_string(grid_.cells[1]) + "x" + std::to_string(grid_.cells[2]) +
-                                            " cells needs at least " + byte_size_text(live_) + " (" + what +
-                                            "), beyond the memory budget of " + byte_size_text(budget_)};
+                                            " cells needs at least " + memory_size_text(live_) + " (" + what +
+                                            "), beyond the memory budget of " + memory_size_text(budget_)};
     return Status::Ok();
   }
   void release(uint64_t bytes) { live_ -= bytes; }
