@@ -103,16 +103,19 @@ def test_taylor_error_falls_with_beta(bunny_holes, bunny_holes_points):
 
 # -- gradient and Hessian ------------------------------------------------------------------------
 
+def model_and_count(request, large, large_count, small_count):
+    """The session's model of the bundled mesh `large` (fewer points: each costs more brute force), or a
+    model of the small mesh the fixture is parametrized with."""
+    if request.param == large:
+        return request.getfixturevalue(large), large_count
+    return gwnrt.Model(request.getfixturevalue(request.param)), small_count
+
+
 # Meshes where grad w is not zero: the open cube, the soup and bunny_holes (on closed meshes w is
 # piecewise constant; the test above covers them).
 @pytest.fixture(scope="module", params=["open_cube", "soup", "bunny_holes"])
 def derivative_case(request):
-    if request.param == "bunny_holes":
-        model = request.getfixturevalue("bunny_holes")
-        count = 60
-    else:
-        model = gwnrt.Model(request.getfixturevalue(request.param))
-        count = 200
+    model, count = model_and_count(request, "bunny_holes", 60, 200)
     v, f = mesh64(model)
     # At least 5% of the diagonal from the mesh, where the third and fourth derivatives the finite
     # differences truncate stay moderate.
@@ -166,12 +169,7 @@ def test_query_fields_equal_single_calls(derivative_case):
 
 @pytest.fixture(scope="module", params=SMALL_MESHES + ["bunny_holes"])
 def distance_case(request):
-    if request.param == "bunny_holes":
-        model = request.getfixturevalue("bunny_holes")
-        count = 300
-    else:
-        model = gwnrt.Model(request.getfixturevalue(request.param))
-        count = 500
+    model, count = model_and_count(request, "bunny_holes", 300, 500)
     v, f = mesh64(model)
     # Include points on and very near the mesh: the distance has no singularity there.
     points = ref.points_around(v, count, 5, pad=0.3)
@@ -235,12 +233,7 @@ def test_open_cube_boundary_is_the_hole(open_cube_model):
 
 @pytest.fixture(scope="module", params=["tetrahedron", "octahedron", "cube", "bunny"])
 def closed_case(request):
-    if request.param == "bunny":
-        model = request.getfixturevalue("bunny")
-        count = 300
-    else:
-        model = gwnrt.Model(request.getfixturevalue(request.param))
-        count = 500
+    model, count = model_and_count(request, "bunny", 300, 500)
     v, f = mesh64(model)
     points = ref.points_around(v, count, 6, pad=0.3)
     distance, _ = ref.unsigned_distance(v, f, points)
