@@ -8,12 +8,14 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <tbb/global_control.h>
 
 #include "exact_distance.h"
+#include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/field/winding_number.h"
 #include "test_util.h"
 
@@ -247,6 +249,24 @@ TEST(Batch, ModelBuiltOnOneOrTwoThreadsAnswersIdentically) {
   const QueryRequest request = request_for(2, false);
   const std::vector<PointResult> a = run_batch(one, points, request), b = run_batch(two, points, request);
   for (size_t i = 0; i < points.size(); ++i) ASSERT_TRUE(identical(a[i], b[i])) << "point " << i;
+}
+
+TEST(Batch, WindingMethodsByName) {
+  // winding_method_named inverts winding_method_name and takes no other name.
+  std::set<std::string> names;
+  for (uint32_t m = 0; m < kWindingMethodCount; ++m) {
+    const char* name = winding_method_name(WindingMethod(m));
+    names.insert(name);
+    WindingMethod found = WindingMethod((m + 1) % kWindingMethodCount);
+    ASSERT_TRUE(winding_method_named(name, found)) << name;
+    EXPECT_EQ(found, WindingMethod(m)) << name;
+  }
+  EXPECT_EQ(names.size(), size_t(kWindingMethodCount));  // no two methods share a name
+  WindingMethod untouched = WindingMethod::kTaylor;
+  for (const char* other : {"", "Taylor", "exact", "crossings", "brute-force"}) {
+    EXPECT_FALSE(winding_method_named(other, untouched)) << other;
+    EXPECT_EQ(untouched, WindingMethod::kTaylor);
+  }
 }
 
 TEST(Batch, RejectsBadRequests) {

@@ -177,6 +177,24 @@ dvec3 solve_planes(const std::vector<std::pair<dvec3, dvec3>>& planes, const dve
   return solve_qef(q, lo, hi);
 }
 
+TEST(MeshingOptions, MethodsAndAttributesByName) {
+  // The names the programs and the Python module take: each finds its own method, others none.
+  for (MeshingMethod m : {MeshingMethod::kDualContouring, MeshingMethod::kMarchingCubes}) {
+    MeshingMethod found =
+        m == MeshingMethod::kDualContouring ? MeshingMethod::kMarchingCubes : MeshingMethod::kDualContouring;
+    ASSERT_TRUE(meshing_method_named(meshing_method_name(m), found)) << meshing_method_name(m);
+    EXPECT_EQ(found, m);
+  }
+  EXPECT_STREQ(meshing_method_name(MeshingMethod::kMarchingCubes), "mc");
+  MeshingMethod untouched = MeshingMethod::kMarchingCubes;
+  for (const char* other : {"", "DC", "dual", "mc ", "m"}) {
+    EXPECT_FALSE(meshing_method_named(other, untouched)) << other;
+    EXPECT_EQ(untouched, MeshingMethod::kMarchingCubes);
+  }
+  EXPECT_EQ(mesh_attribute_named("uv"), uint32_t(kAttributeUv));
+  EXPECT_EQ(mesh_attribute_named("colour"), 0u);
+}
+
 TEST(MeshingQef, ThreePlanesMeetAtTheCorner) {
   const dvec3 corner(0.3, 0.6, 0.45);
   const dvec3 x = solve_planes({{corner + dvec3(0, 0.2, 0.1), {1, 0, 0}},

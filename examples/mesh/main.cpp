@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
   if (cell_size) options.cell_size = *cell_size;
   if (cell_size && !(*cell_size > 0.0f)) return fail(kProgram, "--cell-size must be a number > 0");
   if (resolution && *resolution == 0) return fail(kProgram, "--resolution must be at least 1");
-  options.method = method == "mc" ? gwnrt::MeshingMethod::kMarchingCubes : gwnrt::MeshingMethod::kDualContouring;
+  (void)gwnrt::meshing_method_named(method, options.method);  // --method's check took only these names
   if (Status s = parse_attributes(attributes, options.attributes); !s.ok()) return fail(kProgram, s.message());
   bool use_cuda = false;
   if (Status s = gwnrt::examples::choose_device(kProgram, device, use_cuda); !s.ok())

@@ -249,10 +249,8 @@ int main(int argc, char** argv) {
   request.fields = fields;
   request.taylor.order = order;
   request.taylor.beta = beta;
-  request.method = exact || method_name == "brute" ? gwnrt::WindingMethod::kBrute
-                   : method_name == "crossing"     ? gwnrt::WindingMethod::kCrossing
-                   : method_name == "taylor"       ? gwnrt::WindingMethod::kTaylor
-                                                   : gwnrt::WindingMethod::kAuto;
+  if (exact) method_name = gwnrt::winding_method_name(gwnrt::WindingMethod::kBrute);
+  (void)gwnrt::winding_method_named(method_name, request.method);  // --method's check took only these names
   request.level = level;
   request.newton.max_iterations = newton_iterations;
   request.newton.tolerance = newton_tolerance;
@@ -310,7 +308,7 @@ int main(int argc, char** argv) {
     if (request.fields & ~(gwnrt::kFieldUnsignedDistance | gwnrt::kFieldBoundaryDistance | gwnrt::kFieldSheetDistance))
       std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
                    gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
-                   exact ? "brute" : method_name.c_str());
+                   method_name.c_str());
   }
 
   std::vector<vec3> points;

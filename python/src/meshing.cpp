@@ -65,16 +65,12 @@ py::dict extract(const PythonModel& p, int64_t resolution, float cell_size, cons
   MeshingOptions options;
   options.resolution = checked_integer<uint32_t>(resolution, "resolution (cells along the box's longest side)", 1);
   options.cell_size = cell_size;
-  if (method == "dc")
-    options.method = MeshingMethod::kDualContouring;
-  else if (method == "mc")
-    options.method = MeshingMethod::kMarchingCubes;
-  else
+  if (!meshing_method_named(method, options.method))
     throw py::value_error("method must be 'dc' (dual contouring) or 'mc' (marching cubes), got '" + method + "'");
   options.smooth_angle = smooth_angle;
   options.soup = soup;
   options.attributes = attributes_named(attributes);
-  options.winding.method = winding_method_named(winding_method);
+  options.winding.method = winding_method_argument(winding_method);
   options.winding.taylor.order = checked_integer<int>(order, "order");
   options.winding.taylor.beta = beta;
   options.memory_budget = checked_integer<uint64_t>(memory_budget, "memory_budget (bytes)", 0, INT64_MAX);

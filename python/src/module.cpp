@@ -77,9 +77,9 @@ bool use_cuda(const std::string& device) {
   return usable;
 }
 
-WindingMethod winding_method_named(const std::string& name) {
-  for (uint32_t m = 0; m < kWindingMethodCount; ++m)
-    if (name == winding_method_name(WindingMethod(m))) return WindingMethod(m);
+WindingMethod winding_method_argument(const std::string& name) {
+  WindingMethod method;
+  if (gwnrt::winding_method_named(name, method)) return method;
   throw py::value_error("method must be 'auto', 'crossing', 'taylor' or 'brute', got '" + name + "'");
 }
 
@@ -137,7 +137,7 @@ BuildOptions build_options(bool classify_sheets, float level, const std::string&
   BuildOptions options;
   options.classify_sheets = classify_sheets;
   options.sheet_level = level;
-  options.sheet_method = winding_method_named(sheet_method);
+  options.sheet_method = winding_method_argument(sheet_method);
   if (options.sheet_method == WindingMethod::kBrute)
     throw py::value_error("sheet_method must be 'auto', 'crossing' or 'taylor' (brute would sum n^2 terms)");
   if (!std::isfinite(level)) throw py::value_error("level must be a finite number");

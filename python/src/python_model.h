@@ -40,7 +40,7 @@ bool use_cuda(const std::string& device);
 float level_or_default(const PythonModel& p, std::optional<float> level);
 
 // WindingMethod by winding_method_name; ValueError for another name.
-WindingMethod winding_method_named(const std::string& name);
+WindingMethod winding_method_argument(const std::string& name);
 
 void bind_model(py::module_& m);
 void bind_queries(py::module_& m);

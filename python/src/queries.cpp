@@ -119,7 +119,7 @@ QueryRequest query_request(const std::vector<std::string>& fields, const std::st
                            int64_t newton_iterations, float newton_tolerance) {
   QueryRequest request;
   request.fields = fields_named(fields);
-  request.method = winding_method_named(method);
+  request.method = winding_method_argument(method);
   request.taylor.order = checked_integer<int>(order, "order");
   request.taylor.beta = beta;
   request.newton.max_iterations = checked_integer<uint32_t>(newton_iterations, "max_iterations");

@@ -4,6 +4,8 @@
 // Host-and-device.
 #pragma once
 
+#include <string_view>
+
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/model_view.h"
@@ -30,6 +32,17 @@ GWNRT_HD inline const char* winding_method_name(WindingMethod method) {
     default:
       return "brute";
   }
+}
+
+// The WindingMethod that winding_method_name calls `name`; false for any other name (for the
+// programs and bindings that take the method by name).
+inline bool winding_method_named(std::string_view name, WindingMethod& method) {
+  for (uint32_t m = 0; m < kWindingMethodCount; ++m)
+    if (name == winding_method_name(WindingMethod(m))) {
+      method = WindingMethod(m);
+      return true;
+    }
+  return false;
 }
 
 struct WindingOptions {

@@ -17,6 +17,19 @@ namespace gwnrt {
 
 enum class MeshingMethod : uint32_t { kDualContouring = 0, kMarchingCubes = 1 };
 
+// The methods' names where programs and bindings take them: "dc" and "mc".
+inline const char* meshing_method_name(MeshingMethod method) {
+  return method == MeshingMethod::kMarchingCubes ? "mc" : "dc";
+}
+inline bool meshing_method_named(std::string_view name, MeshingMethod& method) {
+  for (MeshingMethod m : {MeshingMethod::kDualContouring, MeshingMethod::kMarchingCubes})
+    if (name == meshing_method_name(m)) {
+      method = m;
+      return true;
+    }
+  return false;
+}
+
 enum MeshAttribute : uint32_t {
   kAttributeSource = 1u << 0,  // nearest source triangle + barycentrics
   kAttributeUv = 1u << 1,
