@@ -5,8 +5,8 @@
 # CLI11 and nlohmann-json unpacked from Debian's .debs, runs them, and writes every log and JSON
 # into OUTDIR, with summary.txt listing each step's exit status.
 #
-#   bash scripts/gpu-check.sh --fetch-deps   # on Debian 12 with network: fills .gpu-deps/ (~12 MB;
-#                                            # git-ignored; the 871k dragon too when ../shared has it)
+#   bash scripts/gpu-check.sh --fetch-deps   # on Debian 12 with network: fills .gpu-deps/ (11 MB;
+#                                            # git-ignored; and the 871k dragon, 8 MB gzipped, when ../shared has it)
 #   bash scripts/gpu-check.sh OUTDIR         # on the GPU machine, .gpu-deps/ carried along
 #
 # Steps go on when one fails (each has its own log), so that one run says as much as it can.
@@ -81,8 +81,10 @@ step consistency "$bin/gwnrt-consistency" --json "$out/consistency.json"
 
 dragon=""
 if [ -f "$deps/meshes/dragon_vrip.ply.gz" ]; then
-  dragon="$deps/meshes/dragon_vrip.ply"
-  [ -f "$dragon" ] || gunzip -k "$deps/meshes/dragon_vrip.ply.gz"
+  # Unpacked into the build folder, not beside the .gz: .gpu-deps/ travels to the GPU machine, and
+  # the 33 MB mesh would take it past half of what a run may carry (64 MiB with the tree).
+  dragon="build-gpu/dragon_vrip.ply"
+  [ -f "$dragon" ] || { gunzip -c "$deps/meshes/dragon_vrip.ply.gz" >"$dragon.part" && mv "$dragon.part" "$dragon"; }
   step consistency-dragon "$bin/gwnrt-consistency" --mesh "$dragon" --count 1000000 --resolution 256 \
     --json "$out/consistency-dragon.json"
 fi
