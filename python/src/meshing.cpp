@@ -114,20 +114,7 @@ SurfaceMesh surface_mesh(const py::handle& vertices, const py::handle& faces, co
   rows_into(uvs, "uvs", 2, mesh.uvs);
   rows_into(colors, "colors", 4, mesh.colors);
   rows_into(source_barycentrics, "source_barycentrics", 2, mesh.source_barycentrics);
-  if (!source_triangles.is_none()) {
-    py::array any = py::array::ensure(source_triangles);
-    if (!any || any.ndim() != 1 || (any.size() && any.dtype().kind() != 'i' && any.dtype().kind() != 'u'))
-      throw py::value_error("source_triangles must be an integer array of shape (n,)");
-    const py::array_t<int64_t, py::array::c_style | py::array::forcecast> indices(any);
-    mesh.source_triangles.resize(size_t(indices.shape(0)));
-    for (size_t i = 0; i < mesh.source_triangles.size(); ++i) {
-      const int64_t index = indices.data()[i];
-      if (index < 0 || index > int64_t(UINT32_MAX))
-        throw py::value_error("source_triangles[" + std::to_string(i) + "] = " + std::to_string(index) +
-                              " is not a triangle index");
-      mesh.source_triangles[i] = uint32_t(index);
-    }
-  }
+  if (!source_triangles.is_none()) mesh.source_triangles = source_triangle_rows(source_triangles);
   mesh.triangles = face_rows(faces, mesh.positions.size());
   return mesh;
 }

@@ -83,32 +83,50 @@ WindingMethod winding_method_argument(const std::string& name) {
   throw py::value_error("method must be 'auto', 'crossing', 'taylor' or 'brute', got '" + name + "'");
 }
 
-std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
+namespace {
+
+// `obj` as rows of indices, each below `limit`: shape (m, width) for a Row of `width` uint32s,
+// (m,) for one. `name` is the argument, `row` and `index` name a row and what an index points at
+// in the message ("face 2 has vertex index -1, outside [0, 4)").
+template <class Row>
+std::vector<Row> index_rows(const py::handle& obj, const char* name, uint64_t limit, const char* row,
+                            const char* index) {
+  constexpr py::ssize_t width = sizeof(Row) / sizeof(uint32_t);
+  static_assert(sizeof(Row) == width * sizeof(uint32_t));
+  const std::string shape = width == 1 ? "(m,)" : "(m, " + std::to_string(width) + ")";
   py::array any = py::array::ensure(obj);
-  if (!any) throw py::value_error("faces must be an integer array of shape (m, 3)");
+  if (!any) throw py::value_error(std::string(name) + " must be an integer array of shape " + shape);
   if (any.ndim() == 1 && any.shape(0) == 0) return {};
   if (any.dtype().kind() != 'i' && any.dtype().kind() != 'u')
-    throw py::value_error("faces must be an integer array of shape (m, 3), got dtype " +
+    throw py::value_error(std::string(name) + " must be an integer array of shape " + shape + ", got dtype " +
                           std::string(py::str(any.dtype())));
-  if (any.ndim() != 2 || any.shape(1) != 3)
-    throw py::value_error("faces must have shape (m, 3), got " + shape_text(any));
+  if (width == 1 ? any.ndim() != 1 : any.ndim() != 2 || any.shape(1) != width)
+    throw py::value_error(std::string(name) + " must have shape " + shape + ", got " + shape_text(any));
   // Signed and unsigned indices each in a 64-bit type of their own kind, so that neither wraps.
   const auto convert = [&]<class Index>(Index) {
     const py::array_t<Index, py::array::c_style | py::array::forcecast> indices(any);
-    std::vector<uvec3> faces(size_t(indices.shape(0)));
+    std::vector<Row> rows(size_t(indices.shape(0)));
+    uint32_t* out = reinterpret_cast<uint32_t*>(rows.data());
     const Index* v = indices.data();
-    for (size_t f = 0; f < faces.size(); ++f) {
-      for (int c = 0; c < 3; ++c) {
-        const Index index = v[3 * f + c];
-        if (index < 0 || uint64_t(index) >= vertex_count)
-          throw py::value_error("face " + std::to_string(f) + " has vertex index " + std::to_string(index) +
-                                ", outside [0, " + std::to_string(vertex_count) + ")");
-        faces[f][c] = uint32_t(index);
-      }
+    for (size_t i = 0; i < rows.size() * width; ++i) {
+      if (v[i] < 0 || uint64_t(v[i]) >= limit)
+        throw py::value_error(std::string(row) + " " + std::to_string(i / width) + " has " + index + " index " +
+                              std::to_string(v[i]) + ", outside [0, " + std::to_string(limit) + ")");
+      out[i] = uint32_t(v[i]);
     }
-    return faces;
+    return rows;
   };
   return any.dtype().kind() == 'u' ? convert(uint64_t()) : convert(int64_t());
+}
+
+}  // namespace
+
+std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count) {
+  return index_rows<uvec3>(obj, "faces", vertex_count, "face", "vertex");
+}
+
+std::vector<uint32_t> source_triangle_rows(const py::handle& obj) {
+  return index_rows<uint32_t>(obj, "source_triangles", uint64_t(UINT32_MAX) + 1, "source_triangles entry", "triangle");
 }
 
 float level_or_default(const PythonModel& p, std::optional<float> level) {

@@ -43,6 +43,10 @@ FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width
 // (ValueError naming the face otherwise).
 std::vector<uvec3> face_rows(const py::handle& obj, size_t vertex_count);
 
+// `obj` as the source triangle of each vertex: an integer array of shape (m,) of 32-bit indices
+// (ValueError naming the entry otherwise).
+std::vector<uint32_t> source_triangle_rows(const py::handle& obj);
+
 inline std::span<const vec3> as_vec3(const FloatArray& rows) {
   return {reinterpret_cast<const vec3*>(rows.data()), size_t(rows.shape(0))};
 }

@@ -204,8 +204,17 @@ def test_write_mesh_keeps_the_source_attributes_in_ply(bunny, tmp_path):
     np.testing.assert_array_equal(verts["source_triangle"], mesh.source_triangles)
     np.testing.assert_array_equal(np.column_stack([verts["source_u"], verts["source_v"]]), mesh.source_barycentrics)
     np.testing.assert_array_equal(faces, mesh.faces)
-    with pytest.raises(ValueError, match="source_triangles"):
-        gwnrt.write_mesh(path, mesh.vertices, mesh.faces, source_triangles=-np.ones(len(mesh.vertices), np.int64))
+    n = len(mesh.vertices)
+    with pytest.raises(ValueError, match=r"source_triangles entry 0 has triangle index -1, outside \[0, 4294967296\)"):
+        gwnrt.write_mesh(path, mesh.vertices, mesh.faces, source_triangles=-np.ones(n, np.int64))
+    too_big = np.zeros(n, np.uint64)
+    too_big[3] = 2**64 - 1  # unsigned: read as itself, not wrapped to -1
+    with pytest.raises(ValueError, match="source_triangles entry 3 has triangle index 18446744073709551615"):
+        gwnrt.write_mesh(path, mesh.vertices, mesh.faces, source_triangles=too_big)
+    with pytest.raises(ValueError, match=r"source_triangles must have shape \(m,\), got \(%d, 1\)" % n):
+        gwnrt.write_mesh(path, mesh.vertices, mesh.faces, source_triangles=np.zeros((n, 1), np.int32))
+    with pytest.raises(ValueError, match="source_triangles must be an integer array of shape \\(m,\\), got dtype"):
+        gwnrt.write_mesh(path, mesh.vertices, mesh.faces, source_triangles=np.zeros(n))
 
 
 def test_write_mesh_arrays_and_format(tmp_path, octahedron):
