@@ -1,5 +1,5 @@
 // Building error messages inside core: cat() joins strings, numbers and floats (shortest
-// round-trip form) without iostreams; quoted() makes an untrusted token short and printable.
+// round-trip form) without iostreams (tokens from files: quoted_token, gwnrt/io/read_file.h).
 #pragma once
 
 #include <charconv>
@@ -27,19 +27,6 @@ template <class... Parts>
 std::string cat(const Parts&... parts) {
   std::string s;
   (append(s, parts), ...);
-  return s;
-}
-
-// Tokens can come from arbitrary bytes; keep messages short and printable.
-inline std::string quoted(std::string_view tok) {
-  constexpr size_t kMax = 40;
-  std::string s = "'";
-  for (size_t i = 0; i < tok.size() && i < kMax; ++i) {
-    const unsigned char c = static_cast<unsigned char>(tok[i]);
-    s += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
-  }
-  if (tok.size() > kMax) s += "...";
-  s += '\'';
   return s;
 }
 

@@ -22,17 +22,6 @@ namespace point_io_detail {
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
-// A token as messages show it, quoted: it may be binary garbage or a megabyte long.
-inline std::string shown(std::string_view token) {
-  constexpr size_t kMax = 40;
-  std::string s = "'";
-  for (size_t i = 0; i < token.size() && i < kMax; ++i) {
-    const auto c = static_cast<unsigned char>(token[i]);
-    s += c >= 0x20 && c < 0x7f ? char(c) : '?';
-  }
-  return s + (token.size() > kMax ? "...'" : "'");
-}
-
 }  // namespace point_io_detail
 
 // A row is a few numbers and perhaps a comment: a longer line is not a points or rays file (or a
@@ -87,14 +76,14 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
         if (r.ec == std::errc() && std::abs(wide) <= 1.0) {
           value = float(wide);
         } else {
-          return {StatusCode::kParseError, where() + "number out of range: " + shown(token)};
+          return {StatusCode::kParseError, where() + "number out of range: " + quoted_token(token)};
         }
       }
       if (r.ec != std::errc() || r.ptr != last) {
-        return {StatusCode::kParseError, where() + "not a number: " + shown(token)};
+        return {StatusCode::kParseError, where() + "not a number: " + quoted_token(token)};
       }
       if (std::isnan(value) || (std::isinf(value) && !infinite_ok(count))) {
-        return {StatusCode::kParseError, where() + "non-finite value: " + shown(token)};
+        return {StatusCode::kParseError, where() + "non-finite value: " + quoted_token(token)};
       }
       values[count++] = value;
     }

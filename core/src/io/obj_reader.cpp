@@ -3,6 +3,7 @@
 
 #include <cstring>
 
+#include "gwnrt/io/read_file.h"
 #include "io/readers.h"
 #include "io/text.h"
 
@@ -118,7 +119,8 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
       // but must still be numbers.
       while (tk.next(tok)) {
         float v;
-        if (!parse_real(tok, v)) return {StatusCode::kParseError, at("malformed number ", quoted(tok), " in vertex")};
+        if (!parse_real(tok, v))
+          return {StatusCode::kParseError, at("malformed number ", quoted_token(tok), " in vertex")};
         if (n < 6) c[n] = v;
         ++n;
       }
@@ -147,7 +149,7 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
       while (tk.next(tok)) {
         float v;
         if (!parse_real(tok, v))
-          return {StatusCode::kParseError, at("malformed number ", quoted(tok), " in texture coordinate")};
+          return {StatusCode::kParseError, at("malformed number ", quoted_token(tok), " in texture coordinate")};
         if (n < 2) c[n] = v;
         ++n;
       }
@@ -170,10 +172,10 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
         const IntParse r = parse_obj_corner(tok, idx, tex);
         if (r == IntParse::kMalformed) {
           return {StatusCode::kParseError,
-                  at("malformed face corner ", quoted(tok), " (expected i, i/t, i//n or i/t/n)")};
+                  at("malformed face corner ", quoted_token(tok), " (expected i, i/t, i//n or i/t/n)")};
         }
         if (r == IntParse::kOutOfRange) {
-          return {StatusCode::kInvalidMesh, at("index in face corner ", quoted(tok), " is out of range")};
+          return {StatusCode::kInvalidMesh, at("index in face corner ", quoted_token(tok), " is out of range")};
         }
         if (idx == 0) return {StatusCode::kInvalidMesh, at("vertex index 0 is invalid (OBJ indices start at 1)")};
         if (idx > 0 && static_cast<uint64_t>(idx) > kMaxVertices) {
@@ -223,7 +225,7 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
   if (unknown_statements > 0) {
     rep.warnings = cat(unknown_statements, unknown_statements == 1 ? " line" : " lines",
                        " with an unknown statement ignored (the first, line ", first_unknown_line, ": ",
-                       quoted(first_unknown), ")");
+                       quoted_token(first_unknown), ")");
   }
   if (vertex_index.max_index > pos.size()) {
     line_no = vertex_index.max_index_line;

@@ -111,7 +111,7 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
     if (!tk.next(kw)) continue;
     if (kw == "comment" || kw == "obj_info") continue;
     if (kw == "end_header") {
-      if (tk.next(extra)) return err("unexpected ", quoted(extra), " after end_header");
+      if (tk.next(extra)) return err("unexpected ", quoted_token(extra), " after end_header");
       have_end = true;
       break;
     }
@@ -127,9 +127,9 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
       } else if (a == "binary_big_endian") {
         h.format = PlyFormat::kBinaryBe;
       } else {
-        return err("unsupported PLY format ", quoted(a));
+        return err("unsupported PLY format ", quoted_token(a));
       }
-      if (b != "1.0" && b != "1") return err("unsupported PLY format version ", quoted(b), " (expected 1.0)");
+      if (b != "1.0" && b != "1") return err("unsupported PLY format version ", quoted_token(b), " (expected 1.0)");
       have_format = true;
     } else if (kw == "element") {
       if (!have_format) return err("'element' before the 'format' line (missing format line?)");
@@ -138,7 +138,7 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
       const char* const e = b.data() + b.size();
       uint64_t count = 0;
       const auto [ptr, ec] = std::from_chars(b.data(), e, count);
-      if (ec != std::errc() || ptr != e) return err("malformed element count ", quoted(b));
+      if (ec != std::errc() || ptr != e) return err("malformed element count ", quoted_token(b));
       h.elems.push_back({std::string(a), count, {}});
     } else if (kw == "property") {
       if (h.elems.empty()) return err("'property' before any 'element'");
@@ -150,9 +150,9 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
         }
         const auto ct = parse_ty(b);
         const auto it = parse_ty(c);
-        if (!ct) return err("unknown property type ", quoted(b));
-        if (!it) return err("unknown property type ", quoted(c));
-        if (!info(*ct).is_int) return err("list count type ", quoted(b), " is not an integer type");
+        if (!ct) return err("unknown property type ", quoted_token(b));
+        if (!it) return err("unknown property type ", quoted_token(c));
+        if (!info(*ct).is_int) return err("list count type ", quoted_token(b), " is not an integer type");
         prop.list = true;
         prop.count_type = *ct;
         prop.type = *it;
@@ -160,13 +160,13 @@ Status parse_ply_header(const std::string& path, string_view data, PlyHeader& h)
       } else {
         if (!tk.next(b) || tk.next(extra)) return err("malformed property line (expected 'property TYPE NAME')");
         const auto t = parse_ty(a);
-        if (!t) return err("unknown property type ", quoted(a));
+        if (!t) return err("unknown property type ", quoted_token(a));
         prop.type = *t;
         prop.name = std::string(b);
       }
       h.elems.back().props.push_back(std::move(prop));
     } else {
-      return err("unknown PLY header keyword ", quoted(kw), " (missing end_header?)");
+      return err("unknown PLY header keyword ", quoted_token(kw), " (missing end_header?)");
     }
   }
   if (!have_end) return {StatusCode::kParseError, cat(path, ": the PLY header has no end_header line")};
@@ -513,8 +513,8 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
         }
         if (r == Res::kBad) {
           return {StatusCode::kParseError,
-                  cat(src.where(path), ": invalid ", info(src.bad_ty).name, " value ", quoted(src.bad_tok), " in ",
-                      el.name, " ", i, ", property '", pr.name, "'")};
+                  cat(src.where(path), ": invalid ", info(src.bad_ty).name, " value ", quoted_token(src.bad_tok),
+                      " in ", el.name, " ", i, ", property '", pr.name, "'")};
         }
       }
       if (is_vertex) {
@@ -539,7 +539,7 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
     }
   }
   if (!src.only_whitespace_left()) {
-    return {StatusCode::kParseError, cat(src.where(path), ": unexpected data ", quoted(src.bad_tok),
+    return {StatusCode::kParseError, cat(src.where(path), ": unexpected data ", quoted_token(src.bad_tok),
                                          " after the last element declared in the header")};
   }
   // Per-corner texture coordinates win over per-vertex ones (they can hold seams).

@@ -13,6 +13,16 @@
 #include "message.h"
 
 namespace gwnrt {
+
+std::string quoted_token(std::string_view token) {
+  constexpr size_t kMax = 40;
+  std::string s = "'";
+  for (size_t i = 0; i < token.size() && i < kMax; ++i) {
+    const auto c = static_cast<unsigned char>(token[i]);
+    s += c >= 0x20 && c < 0x7f ? char(c) : '?';
+  }
+  return s + (token.size() > kMax ? "...'" : "'");
+}
 namespace {
 
 struct FileCloser {
