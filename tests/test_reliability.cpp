@@ -232,6 +232,43 @@ TEST(Scale, MeshesBeyondTheServedScalesAreRefusedSayingSo) {
   EXPECT_TRUE(GwnModel::build(std::move(unused), model).ok());
 }
 
+TEST(Scale, MeshesFarFromTheOriginAreServedWhileFloatResolvesThem) {
+  // The unit tetrahedron moved by o along (1,1,1). Served (box diagonal >= 1e-4 of o): w, the
+  // distance and the sdf from a point 2 in front of the face x = o, and the ray from it, right to
+  // the points' own rounding (a step of 2^-10 at 1e4). Beyond, refused: at 1e6 S was empty (the
+  // sheets' probe step spanned the mesh) and the sdf infinite.
+  for (const float o : {1e3f, 1e4f}) {
+    Mesh tet = scaled_tetrahedron(1.0f);
+    for (vec3& p : tet.positions) p += vec3(o);
+    const GwnModel model = build_model(tet);
+    const vec3 outside(o - 2.0f, o + 0.25f, o + 0.25f), inside(o + 0.2f, o + 0.2f, o + 0.2f);
+    QueryRequest request;
+    request.fields = kFieldW | kFieldUnsignedDistance | kFieldSignedDistance;
+    const std::vector<vec3> points = {outside, inside};
+    std::vector<PointResult> r(points.size());
+    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    EXPECT_NEAR(r[0].w, 0.0f, 2e-3f) << o;
+    EXPECT_NEAR(r[1].w, 1.0f, 2e-3f) << o;
+    EXPECT_NEAR(r[0].sdf.distance, 2.0f, 2e-3f) << o;
+    EXPECT_NEAR(r[1].sdf.distance, -(inside.x - o), 2e-3f) << o;  // nearest: the face x = o
+    Ray ray;
+    ray.origin = outside;
+    ray.direction = vec3(1, 0, 0);
+    std::vector<RayHit> hits(1);
+    ASSERT_TRUE(trace_rays(model, std::vector<Ray>{ray}, TraceOptions{}, hits).ok());
+    ASSERT_TRUE(hits[0].hit) << o;
+    EXPECT_NEAR(hits[0].t, 2.0f, 2e-3f) << o;
+  }
+  for (const float o : {1e5f, 1e6f, 1e7f, -3e7f}) {
+    Mesh tet = scaled_tetrahedron(1.0f);
+    for (vec3& p : tet.positions) p += vec3(o);
+    GwnModel model;
+    const Status status = GwnModel::build(std::move(tet), model);
+    ASSERT_FALSE(status.ok()) << o;
+    EXPECT_NE(status.message().find("translate the mesh near the origin"), std::string::npos) << status.message();
+  }
+}
+
 TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
   // bunny_holes at 10^k from its box's centre: w within A/(4π d²) of 0 (the bound the plugin's
   // box rests on: no NaN, the far points gave NaN from 3e12), the distance d up to the

@@ -95,8 +95,17 @@ Status check_mesh_scale(const Mesh& mesh) {
   const std::string range = cat("gwnrt computes in float and serves meshes whose coordinates lie within +-",
                                 kMaxMeshCoordinate, " and whose box is at least ", kMinMeshExtent, " across");
   if (largest > kMaxMeshCoordinate)
-    return {StatusCode::kInvalidMesh, cat("mesh: vertex ", largest_vertex, " has a coordinate of magnitude ", largest,
-                                          "; ", range, ": scale the mesh down")};
+    return {StatusCode::kInvalidMesh,
+            cat("mesh: vertex ", largest_vertex, " (counting from 0) has a coordinate of magnitude ", largest, "; ",
+                range, ": scale the mesh down")};
+  const double diagonal = glm::length(dvec3(extent));  // in double: squares of tiny extents underflow in float
+  if (!mesh.triangles.empty() && diagonal < double(kMinMeshExtentPerCoordinate) * largest)
+    return {StatusCode::kInvalidMesh,
+            cat("mesh: its box is ", float(diagonal), " across (diagonal) at ", largest, " from the origin (vertex ",
+                largest_vertex, ", counting from 0), where float coordinates step by ",
+                std::nextafter(largest, kMaxMeshCoordinate * 2.0f) - largest,
+                "; gwnrt computes in float and needs the box's diagonal to be at least ", kMinMeshExtentPerCoordinate,
+                " of its largest coordinate: translate the mesh near the origin")};
   if (!mesh.triangles.empty() && across < kMinMeshExtent)
     return {StatusCode::kInvalidMesh, cat("mesh: its box is ", across, " across; ", range, ": scale the mesh up")};
   return Status::Ok();
