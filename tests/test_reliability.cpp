@@ -269,6 +269,56 @@ TEST(Scale, MeshesFarFromTheOriginAreServedWhileFloatResolvesThem) {
   }
 }
 
+TEST(Scale, RaysFromFarAwayHitWhereRaysFromNearbyDo) {
+  // Lines through the unit tetrahedron along the axes (so that the far origins and directions are
+  // exact in float and the far and near rays share their line), started 3 units before the mesh
+  // and 1e4 to 1e30 units before: the same hit point and normal, t the distance to within float's
+  // step there. From 1e8 the ray's own t stepped by 8 and the tetrahedron was missed.
+  const GwnModel model = build_model(scaled_tetrahedron(1.0f));
+  test::Random rng(7);
+  for (int line = 0; line < 60; ++line) {
+    const int axis = line % 3;
+    const float sign = (line / 3) % 2 ? 1.0f : -1.0f;
+    vec3 across(rng.uniform(0.05f, 0.4f), rng.uniform(0.05f, 0.4f), rng.uniform(0.05f, 0.4f));
+    vec3 d(0.0f);
+    d[axis] = sign;
+    std::vector<Ray> rays;
+    std::vector<double> backs;
+    for (const float back : {3.0f, 1e4f, 1e8f, 1e18f, 1e30f}) {
+      Ray r;
+      r.origin = across;
+      r.origin[axis] = -sign * back;
+      r.direction = d;
+      rays.push_back(r);
+      backs.push_back(back);
+    }
+    std::vector<RayHit> hits(rays.size());
+    ASSERT_TRUE(trace_rays(model, rays, TraceOptions{}, hits).ok());
+    ASSERT_TRUE(hits[0].hit) << line;
+    for (size_t k = 1; k < rays.size(); ++k) {
+      const std::string where = "line " + std::to_string(line) + " from " + std::to_string(backs[k]);
+      ASSERT_TRUE(hits[k].hit) << where;
+      EXPECT_LT(glm::length(hits[k].position - hits[0].position), 1e-5f) << where;
+      EXPECT_LT(glm::length(hits[k].normal - hits[0].normal), 1e-5f) << where;
+      const double distance = backs[k] + double(sign * hits[0].position[axis]);
+      EXPECT_NEAR(hits[k].t, distance, 1.2e-7 * distance) << where;
+    }
+  }
+  // Along a general direction from 1e4 (the far origin's rounding moves the line by 1e-3 there).
+  for (int line = 0; line < 40; ++line) {
+    const vec3 target(rng.uniform(0.05f, 0.3f), rng.uniform(0.05f, 0.3f), rng.uniform(0.05f, 0.3f));
+    const vec3 d = rng.unit();
+    std::vector<Ray> rays(2);
+    rays[0].origin = vec3(dvec3(target) - 3.0 * dvec3(d));
+    rays[1].origin = vec3(dvec3(target) - 1e4 * dvec3(d));
+    rays[0].direction = rays[1].direction = d;
+    std::vector<RayHit> hits(rays.size());
+    ASSERT_TRUE(trace_rays(model, rays, TraceOptions{}, hits).ok());
+    ASSERT_TRUE(hits[0].hit && hits[1].hit) << line;
+    EXPECT_LT(glm::length(hits[1].position - hits[0].position), 1e-2f) << line;
+  }
+}
+
 TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
   // bunny_holes at 10^k from its box's centre: w within A/(4π d²) of 0 (the bound the plugin's
   // box rests on: no NaN, the far points gave NaN from 3e12), the distance d up to the

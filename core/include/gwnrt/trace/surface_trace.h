@@ -51,13 +51,25 @@ class SurfaceTracer {
     }
     len_ = len;
     dir_ = ray.direction / len;
-    frame_ = make_ray_frame(ray.origin, dir_);
-    t_near_ = ray.tnear * len;
-    t_far_ = ray.tfar * len;
+    const vec3 extent = m.bounds.hi - m.bounds.lo;
+    const float diagonal = glm::length(extent);
+    // A ray from far away starts again on its line, across from the box's centre: t and the
+    // points along the ray then step as finely as the mesh's coordinates do, where from 1e8 they
+    // stepped by 8 and a unit tetrahedron was missed. Nearer rays are left as they are (a shift
+    // would only move their rounding). The hit's t adds the shift back.
+    const vec3 centre = 0.5f * (m.bounds.lo + m.bounds.hi);
+    const double ahead = glm::dot(dvec3(centre) - dvec3(ray.origin), dvec3(dir_));
+    vec3 origin = ray.origin;
+    if (ahead > kFarRayDiagonals * double(diagonal)) {
+      origin = vec3(dvec3(ray.origin) + ahead * dvec3(dir_));
+      t_shift_ = float(ahead);
+    }
+    frame_ = make_ray_frame(origin, dir_);
+    t_near_ = ray.tnear * len - t_shift_;
+    t_far_ = ray.tfar * len - t_shift_;
     sheets_ = o.mode == TraceMode::kWindingNumber;
     smooth_ = m.cone.triangle_count > 0;
-    const vec3 extent = m.bounds.hi - m.bounds.lo;
-    eps_ = o.epsilon * glm::length(extent);
+    eps_ = o.epsilon * diagonal;
     phase_ = o.level - floorf(o.level);
     // No sheet and no smooth piece of w is at a level w never reaches (model_view.h); the
     // band's integer arithmetic below then also stays within an int.
@@ -148,7 +160,7 @@ class SurfaceTracer {
   GWNRT_HD bool offer(float t, HitKind kind, const vec3& normal, uint32_t triangle) {
     hit_.hit = true;
     hit_.kind = kind;
-    hit_.t = t / len_;
+    hit_.t = (t + t_shift_) / len_;
     hit_.position = point(t);
     hit_.normal = normal;
     hit_.triangle = triangle;
@@ -313,6 +325,7 @@ class SurfaceTracer {
   RayFrame frame_{};
   vec3 dir_{0.0f};
   float len_ = 1.0f, t_near_ = 0.0f, t_far_ = 0.0f, t_end_ = 0.0f, eps_ = 0.0f, phase_ = 0.5f;
+  float t_shift_ = 0.0f;  // where the ray's own origin lies, in t from the one traced from
   bool sheets_ = false, smooth_ = false;
   int band_ = 0;  // floor(w - w*) just after the last event
   bool have_next_ = false;

@@ -31,6 +31,11 @@ enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
 // cannot be normalised and are refused).
 inline constexpr float kMinDirectionLength = 1.17549435e-38f;
 
+// A ray whose origin lies more than this many box diagonals before the box's centre is traced
+// from its line's point across from the centre (SurfaceTracer): t steps there by 1.2e-7 of the
+// distance, 8e-6 of the diagonal at this threshold.
+inline constexpr double kFarRayDiagonals = 64.0;
+
 struct RayHit {
   bool hit = false;
   bool capped = false;   // a step or crossing cap ended the trace (reported as a miss)
