@@ -319,6 +319,34 @@ TEST(Scale, RaysFromFarAwayHitWhereRaysFromNearbyDo) {
   }
 }
 
+TEST(Scale, GradientWithinRoundingOfAVertexOrAnEdgeIsFinite) {
+  // Points 1e-20 from a vertex and from an edge's line of the unit tetrahedron: |g_i × g_j|² is
+  // denormal in float there, and f/|c|² · c gave 0·inf = NaN in ∇w, H_w and the sdf's first
+  // order. ∇w (about 1/(4π) a component here, each edge's term ~1e20) as the double brute force;
+  // H_w's per-triangle terms reach 1e40, beyond float, and cancel between triangles: not NaN.
+  const GwnModel model = build_model(scaled_tetrahedron(1.0f));
+  const std::vector<vec3> points = {{0.0f, 1e-20f, 1e-20f},
+                                    {1e-20f, 1e-20f, 0.0f},
+                                    {0.5f, 1e-20f, 1e-20f},
+                                    {0.3f, 1e-25f, 0.0f},
+                                    {0.0f, 0.4f, 3e-21f}};
+  for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor}) {
+    QueryRequest request;
+    request.method = method;
+    request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldPseudoDistance;
+    std::vector<PointResult> r(points.size());
+    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    for (size_t i = 0; i < points.size(); ++i) {
+      const std::string where = "point " + std::to_string(i) + " method " + winding_method_name(method);
+      const WindingSampleExact e = winding_number_exact(model.triangle_view(), points[i], true);
+      EXPECT_LE(glm::length(dvec3(r[i].gradient) - e.gradient), 1e-4 * (1.0 + glm::length(e.gradient))) << where;
+      const Sym3<float>& h = r[i].hessian;
+      for (const float v : {h.xx, h.xy, h.xz, h.yy, h.yz, h.zz}) EXPECT_FALSE(std::isnan(v)) << where;
+      EXPECT_TRUE(std::isfinite(r[i].sdf.first_order)) << where;
+    }
+  }
+}
+
 TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
   // bunny_holes at 10^k from its box's centre: w within A/(4π d²) of 0 (the bound the plugin's
   // box rests on: no NaN, the far points gave NaN from 3e12), the distance d up to the

@@ -325,12 +325,11 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
     WindingSample out;
     out.w = detail::crossing_winding(cone, mesh_jumps);
     if constexpr (WantGradient)
-      out.gradient = cone.far_field.gradient * kInv4Pi + vec3(cone.near_gradient.total() * (0.25 * kInvPi));
+      out.gradient =
+          cone.far_field.gradient * kInv4Pi + detail::saturated_float(cone.near_gradient.total() * (0.25 * kInvPi));
     if constexpr (WantHessian) {
-      const Sym3<double> h = cone.near_hessian * (0.25 * kInvPi);
-      const Sym3<float> near{float(h.xx), float(h.xy), float(h.xz), float(h.yy), float(h.yz), float(h.zz)};
       out.hessian = cone.far_field.hessian * kInv4Pi;
-      out.hessian += near;
+      out.hessian += detail::saturated_float(cone.near_hessian * (0.25 * kInvPi));
     }
     return out;
   }

@@ -217,7 +217,28 @@ struct EdgeField {
     f = glm::dot(e, gj_hat - gi_hat);
   }
   GWNRT_HD glm::vec<3, T> gradient() const { return degenerate ? glm::vec<3, T>(0) : c * (f / c2); }
+  // In float: x so near the edge's line (|c| < 1e-15: 1e-20 from a unit mesh's vertex) that
+  // f/|c|² overflows or |c|² is denormal, and 0·inf made the gradient and the Hessian NaN. Such a
+  // triangle is evaluated in double (below). On the line itself (c = 0) the term is 0, as above.
+  GWNRT_HD bool float_underflows() const { return c2 < T(1e-30f) && (c.x != T(0) || c.y != T(0) || c.z != T(0)); }
 };
+
+// A double result in float, held within ±1e30: the terms of a triangle evaluated in double
+// because float underflowed, where the Hessian's reach 1e40 (1/|c|²). They are large only by the
+// edge whose line x nearly lies on, and that edge's terms in the two triangles that share it are
+// exact negatives, so held at the same bound they still cancel (to 0 on a closed mesh), and a sum
+// of up to 1e8 of them stays finite; at float's own limit two made inf and then NaN.
+GWNRT_HD inline float saturated_float(double v) {
+  constexpr double kMax = 1e30;
+  return float(v > kMax ? kMax : (v < -kMax ? -kMax : v));
+}
+GWNRT_HD inline vec3 saturated_float(const dvec3& v) {
+  return {saturated_float(v.x), saturated_float(v.y), saturated_float(v.z)};
+}
+GWNRT_HD inline Sym3<float> saturated_float(const Sym3<double>& h) {
+  return {saturated_float(h.xx), saturated_float(h.xy), saturated_float(h.xz),
+          saturated_float(h.yy), saturated_float(h.yz), saturated_float(h.zz)};
+}
 
 }  // namespace detail
 
@@ -227,8 +248,12 @@ template <class T>
 GWNRT_HD inline glm::vec<3, T> triangle_solid_angle_gradient(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                                              const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
   const glm::vec<3, T> g0 = p0 - x, g1 = p1 - x, g2 = p2 - x;
-  return detail::EdgeField<T>(g0, g1).gradient() + detail::EdgeField<T>(g1, g2).gradient() +
-         detail::EdgeField<T>(g2, g0).gradient();
+  const detail::EdgeField<T> e01(g0, g1), e12(g1, g2), e20(g2, g0);
+  if constexpr (sizeof(T) == sizeof(float)) {
+    if (e01.float_underflows() || e12.float_underflows() || e20.float_underflows())
+      return detail::saturated_float(triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x)));
+  }
+  return e01.gradient() + e12.gradient() + e20.gradient();
 }
 
 // ∇Ω summed over the triangles (apex, a, b) of fans visited in FanCorners' order. Where a
@@ -258,10 +283,20 @@ GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, 
                                                       const glm::vec<3, T>& p2, const glm::vec<3, T>& x,
                                                       glm::vec<3, T>& gradient, Sym3<T>& hessian) {
   const glm::vec<3, T> g[3] = {p0 - x, p1 - x, p2 - x};
+  const detail::EdgeField<T> edges[3] = {{g[0], g[1]}, {g[1], g[2]}, {g[2], g[0]}};
+  if constexpr (sizeof(T) == sizeof(float)) {
+    if (edges[0].float_underflows() || edges[1].float_underflows() || edges[2].float_underflows()) {
+      dvec3 gd;
+      Sym3<double> hd;
+      triangle_solid_angle_derivatives(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x), gd, hd);
+      gradient = detail::saturated_float(gd);
+      hessian = detail::saturated_float(hd);
+      return;
+    }
+  }
   gradient = glm::vec<3, T>(0);
   hessian = Sym3<T>{};
-  for (int i = 0; i < 3; ++i) {
-    const detail::EdgeField<T> edge(g[i], g[(i + 1) % 3]);
+  for (const detail::EdgeField<T>& edge : edges) {
     if (edge.degenerate) continue;
     const T inv_c2 = T(1) / edge.c2;
     const T s = edge.f * inv_c2;

@@ -320,10 +320,10 @@ struct TaylorSum {
         dvec3 g;
         Sym3<double> h;
         triangle_solid_angle_derivatives(q0, q1, q2, xd, g, h);
-        if constexpr (WantGradient) acc.gradient += vec3(g);
-        acc.hessian += Sym3<float>{float(h.xx), float(h.xy), float(h.xz), float(h.yy), float(h.yz), float(h.zz)};
+        if constexpr (WantGradient) acc.gradient += detail::saturated_float(g);
+        acc.hessian += detail::saturated_float(h);
       } else if constexpr (WantGradient) {
-        acc.gradient += vec3(triangle_solid_angle_gradient(q0, q1, q2, xd));
+        acc.gradient += detail::saturated_float(triangle_solid_angle_gradient(q0, q1, q2, xd));
       }
       return;
     }
