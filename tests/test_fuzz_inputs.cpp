@@ -851,6 +851,52 @@ TEST_F(LimitsCli, BenchmarkInputFilesAreCheckedFirst) {
   EXPECT_EQ(r.out.find("== "), std::string::npos) << "the first mesh ran:\n" << r.out;
 }
 
+// Finding F8: the tracer's options beyond what validate_trace_options takes (caps of 0, a NaN
+// level, epsilon outside (0, 1), beta 0) used to fail with the library's message, which names no
+// flag ("step and crossing caps must be at least 1"); gwnrt-render named --max-steps only. Both
+// programs now refuse each such value while parsing, by the flag's name; the limits' edges and
+// values whose float would be 0 or inf included. Values just inside are taken.
+TEST_F(LimitsCli, TraceOptionsAreRefusedByTheirFlag) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> bad = {
+      {"--max-crossings", {"0", "-1", "1.5", "nan", "4294967296"}},
+      {"--max-steps", {"0", "-1", "2.5", "inf", "4294967296"}},
+      {"--level", {"nan", "inf", "-inf", "1e39", "abc"}},
+      {"--eps", {"0", "1", "-1e-5", "1e-50", "nan", "inf", "0.99999999"}},
+      {"--beta", {"0", "-2", "nan", "inf", "1e39", "1e-50"}}};
+  struct Program {
+    const char* name;
+    std::string args;  // a run that succeeds
+  };
+  const std::vector<Program> programs = {
+      {"gwnrt-trace", quote(mesh_) + " --rays " + quote(rays_) + " -o " + quote(out("hits.csv"))},
+      {"gwnrt-render", quote(open_mesh_) + " --integrator first-hit --width 8 --height 6 -o " + quote(out("f8.png"))}};
+  size_t ran = 0;
+  for (const Program& p : programs) {
+    const std::string b = test::example_binary(p.name);
+    if (b.empty()) continue;  // gwnrt-render is built with Embree only
+    ++ran;
+    for (const auto& [flag, values] : bad) {
+      if (std::string(p.name) == "gwnrt-render" && flag == "--max-crossings") continue;  // not an option there
+      for (const std::string& v : values) {
+        const std::string args = p.args + " " + flag + " " + quote(v);
+        SCOPED_TRACE(args);
+        const RunResult r = run_with_timeout(b, args);
+        expect_clean_exit(r, args);
+        EXPECT_NE(r.exit_code, 0) << r.err;
+        EXPECT_NE(r.err.find(flag + ": must be "), std::string::npos) << r.err;
+      }
+    }
+    // The edges from inside: the smallest caps, epsilon near 1, a huge beta, a level out of reach
+    // (a warning, not an error).
+    std::string good = p.args + " --max-steps 1 --eps 0.999 --beta 1e30 --level -3e38";
+    if (std::string(p.name) == "gwnrt-trace") good += " --max-crossings 1";
+    const RunResult r = run_with_timeout(b, good);
+    expect_clean_exit(r, good);
+    EXPECT_EQ(r.exit_code, 0) << good << "\n" << r.err;
+  }
+  EXPECT_GE(ran, 1u) << "gwnrt-trace is not built next to the tests";
+}
+
 // Issue 15, item 11: every program says what loading skipped (an OBJ line nobody knows), not just
 // gwnrt-mesh and gwnrt-query, and still runs.
 TEST_F(LimitsCli, UnknownObjStatementsAreWarnedAbout) {

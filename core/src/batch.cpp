@@ -197,12 +197,12 @@ Status evaluate_points_to_columns(const GwnModel& model, std::span<const vec3> p
 Status validate_trace_options(const TraceOptions& options) {
   if (options.mode != TraceMode::kWindingNumber && options.mode != TraceMode::kSolidAngle)
     return {StatusCode::kInvalidArgument, "trace mode must be winding-number or solid-angle"};
-  if (!std::isfinite(options.level)) return {StatusCode::kInvalidArgument, "trace level must be a finite number"};
-  if (!(options.epsilon > 0.0f) || !(options.epsilon < 1.0f))
+  if (!trace_level_valid(options.level)) return {StatusCode::kInvalidArgument, "trace level must be a finite number"};
+  if (!trace_epsilon_valid(options.epsilon))
     return {StatusCode::kInvalidArgument, "trace epsilon must lie in (0, 1) (it is relative to the box diagonal)"};
-  if (!(options.beta > 0.0f) || !(options.beta < kInfinity))
+  if (!trace_beta_valid(options.beta))
     return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
-  if (options.max_steps == 0 || options.max_crossings == 0)
+  if (!trace_cap_valid(options.max_steps) || !trace_cap_valid(options.max_crossings))
     return {StatusCode::kInvalidArgument, "step and crossing caps must be at least 1"};
   return Status::Ok();
 }

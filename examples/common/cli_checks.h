@@ -5,10 +5,13 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <system_error>
 
 #include <CLI/CLI.hpp>
+
+#include "gwnrt/trace/trace_types.h"
 
 namespace gwnrt::examples {
 
@@ -33,6 +36,31 @@ inline CLI::Validator positive_number() {
 // A share in [0, 1].
 inline CLI::Validator unit_interval() {
   return number_check([](double v) { return v >= 0 && v <= 1; }, "a number in [0, 1]", "in [0, 1]");
+}
+
+// The tracer's options (gwnrt-trace, gwnrt-render --integrator first-hit), with the limits
+// validate_trace_options enforces (trace_types.h), applied to the float each is stored in (1e-50
+// is 0 as a float, 1e39 inf): the library's refusal names no flag, these name it (CLI11 puts the
+// option's name before the message).
+inline CLI::Validator trace_level_number() {
+  // An angle in solid-angle mode is stored divided by 4 pi; refused here when its float is
+  // infinite all the same (beyond 3.4e38 radians no angle means anything).
+  return number_check([](double v) { return trace_level_valid(float(v)); }, "a finite number, not inf as a float",
+                      "finite");
+}
+inline CLI::Validator trace_epsilon_number() {
+  return number_check([](double v) { return trace_epsilon_valid(float(v)); },
+                      "a number in (0, 1), not 0 or 1 as a float (a share of the mesh's box diagonal)", "in (0, 1)");
+}
+inline CLI::Validator trace_beta_number() {
+  return number_check([](double v) { return trace_beta_valid(float(v)); },
+                      "a finite number > 0, not 0 or inf as a float", "> 0");
+}
+// A step or crossing cap: a whole number the uint32_t it is stored in holds, at least 1.
+inline CLI::Validator trace_cap_number() {
+  return number_check(
+      [](double v) { return v >= 0 && v <= double(UINT32_MAX) && v == std::floor(v) && trace_cap_valid(uint32_t(v)); },
+      "a whole number in [1, " + std::to_string(UINT32_MAX) + "]", ">= 1");
 }
 
 }  // namespace gwnrt::examples

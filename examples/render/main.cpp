@@ -18,6 +18,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_checks.h"
 #include "device_choice.h"
 #include "gwnrt/batch.h"
 #include "image_output.h"
@@ -156,18 +157,24 @@ int main(int argc, char** argv) {
                  "{Omega = level mod 4 pi}, smooth pieces only")
       ->capture_default_str()
       ->check(CLI::IsMember({"gwn", "solid-angle"}));
+  // The tracer's options are checked by their flags' names, with validate_trace_options' limits
+  // (which the first hit still applies below, naming no flag).
   app.add_option("--level", level,
                  "gwn mode: the value of w (default 0.5); solid-angle mode: an angle in radians (default 2 pi)")
-      ->type_name("L");
+      ->type_name("L")
+      ->check(gwnrt::examples::trace_level_number());
   app.add_option("--eps", epsilon, "Harnack stopping distance, relative to the mesh's box diagonal")
       ->type_name("E")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_epsilon_number());
   app.add_option("--max-steps", max_steps, "Harnack steps per ray before it is given up (counted as capped)")
       ->type_name("N")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_cap_number());
   app.add_option("--beta", beta, "Accuracy of the multipole evaluation: expand a cluster beyond beta * radius")
       ->type_name("B")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_beta_number());
   app.add_option("--threads", threads, "CPU threads (default: all)")->type_name("N");
   std::string device = "cpu";
   int64_t frames = 1;
@@ -197,18 +204,12 @@ int main(int argc, char** argv) {
     return fail("--width and --height must lie in [1, " + std::to_string(kMaxImageSide) + "], got " +
                 std::to_string(width) + "x" + std::to_string(height));
   }
-  for (const auto& [name, value] : {std::pair{"--azimuth", azimuth}, std::pair{"--elevation", elevation},
-                                    std::pair{"--fov", fov}, std::pair{"--eps", epsilon}, std::pair{"--beta", beta}}) {
+  for (const auto& [name, value] :
+       {std::pair{"--azimuth", azimuth}, std::pair{"--elevation", elevation}, std::pair{"--fov", fov}}) {
     if (auto why = check_finite(name, value)) return fail(*why);
-  }
-  if (level) {
-    if (auto why = check_finite("--level", *level)) return fail(*why);
   }
   if (elevation < -90.0 || elevation > 90.0) return fail("--elevation must lie in [-90, 90] degrees");
   if (!(fov > 0.0 && fov < 180.0)) return fail("--fov must lie in (0, 180) degrees");
-  if (max_steps < 1 || max_steps > int64_t(UINT32_MAX)) {
-    return fail("--max-steps must lie in [1, " + std::to_string(UINT32_MAX) + "], got " + std::to_string(max_steps));
-  }
   if (app.count("--threads") && threads < 1) return fail("--threads must be at least 1");
 
   const std::string description = command_line(argc, argv);

@@ -98,15 +98,24 @@ int main(int argc, char** argv) {
   app.add_option("--mode", mode, "gwn: S = boundary of {w > level}; solid-angle: {Omega = level mod 4pi}")
       ->capture_default_str()
       ->check(CLI::IsMember({"gwn", "solid-angle"}));
+  // The tracer's options are checked here, by their flags' names, with validate_trace_options'
+  // limits (which it still applies below, naming no flag).
   app.add_option("--level", level,
                  "Target level: a value of w (gwn, default 0.5) or an angle in radians (solid-angle, "
-                 "default 2pi)");
+                 "default 2pi)")
+      ->check(gwnrt::examples::trace_level_number());
   app.add_option("--eps", options.epsilon, "Stopping distance, relative to the mesh's box diagonal")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_epsilon_number());
   app.add_option("--max-steps", options.max_steps, "Harnack steps allowed per ray (capped rays are reported)")
-      ->capture_default_str();
-  app.add_option("--max-crossings", options.max_crossings, "Triangle crossings allowed per ray")->capture_default_str();
-  app.add_option("--beta", options.beta, "Accuracy of the multipole evaluation of w mod 1")->capture_default_str();
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_cap_number());
+  app.add_option("--max-crossings", options.max_crossings, "Triangle crossings allowed per ray")
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_cap_number());
+  app.add_option("--beta", options.beta, "Accuracy of the multipole evaluation of w mod 1")
+      ->capture_default_str()
+      ->check(gwnrt::examples::trace_beta_number());
   app.add_flag("--exact", options.exact, "Evaluate w mod 1 by the brute-force double sum (slow reference)");
   app.add_option("--device", device, gwnrt::examples::kDeviceHelp)
       ->capture_default_str()

@@ -2,6 +2,7 @@
 // by the tracer, the batch driver, the CUDA backend and the Embree plugin.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "gwnrt/geometry/bvh.h"
@@ -24,6 +25,14 @@ struct TraceOptions {
   bool overstep = true;
   bool exact = false;  // φ by the double brute-force sum over the cone (reference, slow)
 };
+
+// The values validate_trace_options (batch.h) accepts, option by option: it checks with these,
+// and a program checks its flags with them, so that a bad value is refused by the flag's name
+// before anything is loaded (the library's own message cannot name a flag).
+inline bool trace_level_valid(float level) { return std::isfinite(level); }
+inline bool trace_epsilon_valid(float epsilon) { return epsilon > 0.0f && epsilon < 1.0f; }  // box diagonals
+inline bool trace_beta_valid(float beta) { return beta > 0.0f && beta < kInfinity; }
+inline bool trace_cap_valid(uint32_t cap) { return cap >= 1; }  // max_steps, max_crossings
 
 enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
 
