@@ -2,6 +2,7 @@
 // the level is a value of w in gwn mode and an angle in radians in solid-angle mode.
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -18,13 +19,22 @@ inline void set_trace_surface(const std::string& mode, std::optional<double> lev
   options.level = solid_angle ? float(level.value_or(2.0 * kPi) / (4.0 * kPi)) : float(level.value_or(0.5));
 }
 
-// Printed by the programs that trace: a level w never reaches has no surface, and every ray then
-// misses (model_view.h, level_within_reach); this says why.
+// A level w never reaches has no surface, and every ray then misses (model_view.h,
+// level_within_reach): why, for a mesh of `triangle_count` triangles, or nothing when the level
+// is within reach (or the mode is solid-angle, whose levels are angles).
+inline std::optional<std::string> level_out_of_reach(uint32_t triangle_count, const TraceOptions& options) {
+  if (options.mode != TraceMode::kWindingNumber || level_within_reach(triangle_count, options.level))
+    return std::nullopt;
+  char text[160];
+  std::snprintf(text, sizeof text, "level %g lies outside every value w takes on this mesh (|w| < %u/2): S is empty",
+                double(options.level), triangle_count);
+  return std::string(text);
+}
+
+// Printed by the programs that trace, for the model they trace.
 inline void warn_if_level_out_of_reach(const char* program, const ModelView& view, const TraceOptions& options) {
-  if (options.mode == TraceMode::kWindingNumber && !level_within_reach(view, options.level))
-    std::fprintf(stderr,
-                 "%s: warning: level %g lies outside every value w takes on this mesh (|w| < %u/2): S is empty\n",
-                 program, double(options.level), view.triangles.triangle_count);
+  if (const auto why = level_out_of_reach(view.triangles.triangle_count, options))
+    std::fprintf(stderr, "%s: warning: %s\n", program, why->c_str());
 }
 
 }  // namespace gwnrt::examples

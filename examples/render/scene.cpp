@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <initializer_list>
 #include <limits>
+#include <set>
 #include <stdexcept>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -15,6 +16,7 @@
 #include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/read_file.h"
+#include "trace_level.h"
 
 namespace gwnrt::render {
 namespace {
@@ -83,6 +85,68 @@ std::string at(const std::string& where, const std::string& key) {
 }
 
 std::string at(const std::string& where, size_t index) { return where + "/" + std::to_string(index); }
+
+// JSON lets an object give a key twice, and nlohmann keeps the last: a second "camera" (a
+// forgotten `{}`, say) silently replaced the first, and readers differ on which one they keep.
+// Called by the parser at each event (json::parse's callback), this follows where in the text it
+// is, and refuses a key its object already has, naming it by its JSON location.
+class DuplicateKeyCheck {
+ public:
+  bool operator()(int /*depth*/, json::parse_event_t event, const json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+        levels_.emplace_back(true);
+        break;
+      case json::parse_event_t::array_start:
+        levels_.emplace_back(false);
+        break;
+      case json::parse_event_t::key: {
+        Level& object = levels_.back();
+        object.key = parsed.get<std::string>();
+        if (!object.keys.insert(object.key).second)
+          fail(at(location_of_top(), object.key), "duplicate key (the object has it already; give each key once)");
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        levels_.pop_back();
+        element_done();
+        break;
+      case json::parse_event_t::value:
+        element_done();
+        break;
+    }
+    return true;  // keep everything: this only checks
+  }
+
+ private:
+  // An object being read (its keys so far, the latest one) or an array (the index of the
+  // element being read).
+  struct Level {
+    explicit Level(bool is_object) : object(is_object) {}
+    bool object;
+    std::set<std::string> keys;
+    std::string key;
+    size_t index = 0;
+  };
+
+  // A value ended (a number, a string, a whole object or array): in an array, the next one is
+  // the next index.
+  void element_done() {
+    if (!levels_.empty() && !levels_.back().object) ++levels_.back().index;
+  }
+
+  // The JSON pointer of the innermost object or array: each enclosing level's current key or
+  // index.
+  std::string location_of_top() const {
+    std::string where;
+    for (size_t i = 0; i + 1 < levels_.size(); ++i)
+      where = levels_[i].object ? at(where, levels_[i].key) : at(where, levels_[i].index);
+    return where;
+  }
+
+  std::vector<Level> levels_;
+};
 
 // Refuses any key of the object `j` that is not in `allowed` (issue 15, item 12: a misspelt key
 // is an error, not a silently kept default).
@@ -418,6 +482,16 @@ void check_geometry(const SceneDesc& s, const Locations& where) {
   }
 }
 
+// A GWN object whose level w never reaches renders nothing, which the image alone does not
+// explain: the scene keeps a warning, worded as gwnrt-trace's (trace_level.h). The count is the
+// mesh's own, zero-area triangles included (the plugin's model leaves them out): the bound still
+// holds, so the warning is never wrong.
+void note_level_out_of_reach(const GwnObjectDesc& object, const std::string& where, SceneDesc& s) {
+  const uint32_t triangles = uint32_t(std::min<size_t>(object.mesh.triangles.size(), UINT32_MAX));
+  if (const auto why = examples::level_out_of_reach(triangles, object.options))
+    s.warnings.push_back(where + ": " + *why);
+}
+
 void read_camera(const json* c, SceneDesc& s, Locations& where) {
   // What a missing "camera" block or key means.
   vec3 eye(0.0f, 0.0f, 5.0f), target(0.0f), up(0.0f, 1.0f, 0.0f);
@@ -546,6 +620,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
       d.options.max_steps = uint32_t(integer(*v, at(w, "max_steps"), 1, 1 << 30));
     if (const json* v = member(e, "beta")) d.options.beta = number(*v, at(w, "beta"));
     if (Status st = validate_trace_options(d.options); !st.ok()) fail(w, st.message());
+    note_level_out_of_reach(d, member(e, "level") ? at(w, "level") : w, s);
     std::vector<std::string> instance_where;
     const json* instances = member(e, "instances");
     if (instances && member(e, "transform")) fail(w, "give \"instances\" or \"transform\", not both");
@@ -570,6 +645,10 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   });
   if (const json* e = member(j, "environment")) read_environment(*e, base, s.environment);
   if (const json* e = member(j, "sun")) read_sun(*e, s.sun);
+  // A scene without geometry would render the sky alone, and exit 0: `{}` or a file whose
+  // sections were left out is a mistake far more often than a picture of the sky (scene.h).
+  if (s.meshes.empty() && s.gwn_objects.empty())
+    fail("", "the scene has nothing to render: give \"meshes\" or \"gwn_objects\" (or both)");
   check_geometry(s, where);
 }
 
@@ -617,10 +696,14 @@ Status parse_scene(const std::string& text, const std::string& path, SceneDesc& 
   return guard_status(path.c_str(), [&]() -> Status {
     json j;
     try {
-      j = json::parse(text);
+      DuplicateKeyCheck duplicates;
+      j = json::parse(
+          text, [&](int depth, json::parse_event_t event, json& parsed) { return duplicates(depth, event, parsed); });
     } catch (const json::exception& e) {
       // parse_error (malformed text, invalid UTF-8) and out_of_range (a number beyond double).
       return {StatusCode::kParseError, path + ": not valid JSON: " + json_error_text(text, e)};
+    } catch (const SceneError& e) {  // a key given twice
+      return {StatusCode::kInvalidArgument, path + ": " + e.what()};
     }
     SceneDesc scene;
     try {
@@ -628,6 +711,7 @@ Status parse_scene(const std::string& text, const std::string& path, SceneDesc& 
     } catch (const SceneError& e) {
       return {StatusCode::kInvalidArgument, path + ": " + e.what()};
     }
+    for (std::string& warning : scene.warnings) warning = path + ": " + warning;
     out = std::move(scene);
     return Status::Ok();
   });
@@ -683,6 +767,7 @@ Status default_scene(const std::string& mesh_path, SceneDesc& out) {
       s.materials = {Material{MaterialKind::kDiffuse, Spectrum(0.8f)},
                      Material{MaterialKind::kDiffuse, Spectrum(0.5f)}};
       s.material_names = {"object", "ground"};
+      note_level_out_of_reach(object, mesh_path, s);
       s.gwn_objects.push_back(std::move(object));
       MeshDesc ground;
       ground.source = "plane";

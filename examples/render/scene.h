@@ -25,7 +25,11 @@
 // Every key is one of those above (a material's keys: those of its type): an unknown or misspelt
 // key is an error naming its JSON location, not ignored, because a typo that silently leaves a
 // default in place (a "radiance" spelt "radiancee", a "scale" on the wrong level) renders a
-// wrong image that nothing explains. Each section has its type (an object, an array), numbers are
+// wrong image that nothing explains. For the same reason a key given twice in one object is an
+// error (JSON allows it, and readers keep one or the other), and so is a scene with neither
+// "meshes" nor "gwn_objects" (it would render the sky alone). A GWN object's "level" that w never
+// reaches on its mesh (|level| >= half its triangle count) is accepted with a warning: it renders
+// nothing. Each section has its type (an object, an array), numbers are
 // finite and within float's range, and the values are refused (with their location) where the
 // renderer could not carry them through float arithmetic (scene.cpp says why each limit is what
 // it is): coordinates of the eye, the target and the geometry in world space beyond ±1e12 (so
@@ -94,6 +98,9 @@ struct SceneDesc {
   EnvironmentDesc environment;
   Sun sun;
   std::vector<LoadedMesh> loaded_meshes;  // every mesh file read, in order
+  // What was accepted but deserves a word, for the program to print: "<file>: <JSON location>:
+  // ..." (a GWN object whose level w never reaches, so that it renders nothing).
+  std::vector<std::string> warnings;
 };
 
 // Reads a scene file; a bad file fails with its path and the JSON location of the problem (the

@@ -214,6 +214,32 @@ TEST_F(RenderCli, Issue15Item12_WrongSectionsAndUnknownKeysAreRefused) {
   }
 }
 
+// Finding F9: a key given twice and a scene without geometry used to render (exit 0), the one
+// with a value silently dropped, the other an empty sky; a GWN object whose level w never reaches
+// rendered nothing of it without a word. Now two refusals naming the location, and a warning.
+TEST_F(RenderCli, DuplicateKeysEmptyScenesAndUnreachableLevels) {
+  const std::string out = " -o " + test::quote(test::temp_path("f9.png"));
+  const std::string bunny = test::data_path("bunny_holes.obj");
+  for (const auto& [scene, where] :
+       {std::pair{std::string("{}"), std::string("/: the scene has nothing to render")},
+        std::pair{R"({"camera": {"eye": [0, 1, 5]}, "gwn_objects": [{"file": ")" + bunny + R"("}], "camera": {}})",
+                  std::string("/camera: duplicate key")}}) {
+    const std::string path = write_temp("f9.json", scene);
+    expect_refusal(binary_, test::quote(path) + out, path + ": " + where);
+    std::remove(path.c_str());
+  }
+  const std::string path = write_temp("f9.json", R"({"gwn_objects": [{"file": ")" + bunny + R"(", "level": 1e30}]})");
+  const test::RunResult r = test::run_program(binary_, test::quote(path) + out + " --spp 1 --width 8 --height 6");
+  ASSERT_TRUE(r.exited) << r.err;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gwnrt-render: warning: " + path +
+                       ": /gwn_objects/0/level: level 1e+30 lies outside every value w takes on this mesh (|w| < "
+                       "3524/2): S is empty\n"),
+            std::string::npos)
+      << r.err;
+  std::remove(path.c_str());
+}
+
 // Issue 15, item 13: an emission above 1.8e19 used to render black in PNG (the tone curve's
 // v² overflowed to inf / inf), and 3e38 also overflowed the pixel's sum of samples. Now the
 // largest radiance allowed (1e20) renders white, and 3e38 is refused.

@@ -57,8 +57,10 @@ void expect_accepted(const std::string& text, SceneDesc* out = nullptr) {
   if (out) *out = std::move(s);
 }
 
+// A camera over a unit plane (a scene needs something to render).
 std::string camera(const std::string& eye, const std::string& target, const std::string& up) {
-  return R"({"camera": {"eye": )" + eye + R"(, "target": )" + target + R"(, "up": )" + up + R"(}})";
+  return R"({"meshes": [{"plane": 1}], "camera": {"eye": )" + eye + R"(, "target": )" + target + R"(, "up": )" + up +
+         R"(}})";
 }
 
 // Item 1: a camera that would make non-finite or meaningless rays (Embree's ray.valid() aborted).
@@ -84,8 +86,8 @@ TEST(SceneChecks, Issue15Item1_DegenerateCameraIsRefused) {
   expect_accepted(camera("[0, 0, 1e-30]", "[0, 0, 0]", "[0, 1e-30, 0]"));
   expect_accepted(camera("[0, 5, 0]", "[0, 0, 0]", "[0.01745, 1, 0]"));
   expect_accepted(camera("[0, 1e12, 5]", "[0, 0, 0]", "[1, 0, 0]"));
-  expect_accepted(R"({"camera": {"fov": 1e-30}})");
-  expect_accepted(R"({"camera": {"fov": 179.99}})");
+  expect_accepted(R"({"meshes": [{"plane": 1}], "camera": {"fov": 1e-30}})");
+  expect_accepted(R"({"meshes": [{"plane": 1}], "camera": {"fov": 179.99}})");
 }
 
 // Item 1: geometry whose world-space coordinates float cannot carry through Embree.
@@ -345,10 +347,76 @@ TEST(SceneChecks, Issue15Item13_RadiancesBeyondTheLimitOrNegativeAreRefused) {
   expect_refused(R"({"materials": {"g": {"type": "dielectric", "ior": 1e30}}})", "/materials/g/ior");
   expect_refused(R"({"materials": {"g": {"type": "dielectric", "ior": 1e-30}}})", "/materials/g/ior");
   SceneDesc s;
-  expect_accepted(R"({"materials": {"m": {"type": "emissive", "emission": [1e20, 0, 1e20]}},
+  expect_accepted(R"({"materials": {"m": {"type": "emissive", "emission": [1e20, 0, 1e20]}}, "meshes": [{"plane": 1}],
                       "environment": {"radiance": [1e20, 1e20, 1e20]}, "sun": {"radiance": [1e20, 0, 0]}})",
                   &s);
   EXPECT_EQ(s.materials[0].emission.x, kMaxRadiance);
+}
+
+// Finding F9a: a key given twice in one object was accepted, the later value silently replacing
+// the earlier (a second "camera": {} dropped the first); it is refused, at its JSON location, at
+// any depth and inside arrays, while the same key in different objects is fine.
+TEST(SceneChecks, DuplicateKeysAreRefused) {
+  expect_refused(R"({"camera": {"fov": 30}, "meshes": [{"plane": 1}], "camera": {}})", "/camera", "duplicate key");
+  expect_refused(R"({"meshes": [{"plane": 1}, {"plane": 2, "material": "m", "plane": 3}]})", "/meshes/1/plane",
+                 "duplicate key");
+  // Behind an array of numbers (the matrix), in the second entry of an array of objects.
+  expect_refused(R"({"gwn_objects": [{"file": "bunny_holes.obj", "instances": [
+                      {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]},
+                      {"translate": [1, 0, 0], "scale": 2, "translate": [2, 0, 0]}]}]})",
+                 "/gwn_objects/0/instances/1/translate", "duplicate key");
+  // Keys are compared as given and located as JSON pointers ("/" escaped).
+  expect_refused(R"({"materials": {"a/b": {"type": "diffuse"}, "a/b": {"type": "diffuse"}}, "meshes": [{"plane": 1}]})",
+                 "/materials/a~1b", "duplicate key");
+  // Found while parsing: before anything else is checked (the unknown key after it).
+  expect_refused(R"({"sun": {"radiance": [1, 1, 1], "radiance": [2, 2, 2]}, "zz": 1})", "/sun/radiance",
+                 "duplicate key");
+  expect_accepted(R"({"meshes": [{"plane": 1, "material": "m"}, {"plane": 2, "material": "m"}],
+                      "materials": {"m": {"type": "diffuse"}, "n": {"type": "diffuse"}}})");
+}
+
+// Finding F9b: a scene with nothing in it (`{}`) rendered the sky alone and exited 0.
+TEST(SceneChecks, SceneWithoutGeometryIsRefused) {
+  for (const char* text : {"{}", R"({"meshes": [], "gwn_objects": []})",
+                           R"({"camera": {"eye": [0, 0, 5]}, "environment": {"radiance": [1, 1, 1]}})"})
+    expect_refused(text, "/", "nothing to render");
+  expect_accepted(R"({"meshes": [{"plane": 1}]})");
+  expect_accepted(R"({"gwn_objects": [{"file": "bunny_holes.obj"}]})");
+}
+
+// Finding F9c: a GWN object whose level w never reaches on its mesh (|level| >= half its
+// triangle count) renders nothing; the scene is accepted with a warning naming the object's
+// level, worded as gwnrt-trace's, and none for a level within reach or in solid-angle mode.
+TEST(SceneChecks, UnreachableLevelIsWarnedAbout) {
+  for (const char* level : {"1e30", "-1e30", "3.4e38"}) {
+    SCOPED_TRACE(level);
+    SceneDesc s;
+    expect_accepted(
+        std::string(R"({"gwn_objects": [{"file": "bunny_holes.obj"}, {"file": "bunny_holes.obj", "level": )") + level +
+            "}]}",
+        &s);
+    ASSERT_EQ(s.warnings.size(), 1u);
+    EXPECT_EQ(s.warnings[0].find(test::data_path("inline.json") + ": /gwn_objects/1/level: level "), 0u)
+        << s.warnings[0];
+    EXPECT_NE(s.warnings[0].find(" lies outside every value w takes on this mesh"), std::string::npos) << s.warnings[0];
+  }
+  for (const char* object :
+       {R"({"file": "bunny_holes.obj", "level": 0.5})", R"({"file": "bunny_holes.obj", "level": -3})",
+        R"({"file": "bunny_holes.obj", "mode": "solid-angle", "level": 1e30})"}) {
+    SceneDesc s;
+    expect_accepted(std::string(R"({"gwn_objects": [)") + object + "]}", &s);
+    EXPECT_TRUE(s.warnings.empty()) << object << ": " << s.warnings[0];
+  }
+  // The default scene of a mesh says so too: one triangle has |w| < 1/2, so the default level 1/2
+  // is out of reach.
+  const std::string path = test::temp_path("one_triangle.obj");
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  SceneDesc s;
+  const Status st = default_scene(path, s);
+  ASSERT_TRUE(st.ok()) << st.message();
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], path + ": level 0.5 lies outside every value w takes on this mesh (|w| < 1/2): S is empty");
+  std::remove(path.c_str());
 }
 
 // Item 13: a projective matrix (last row not 0 0 0 1) cannot place geometry.

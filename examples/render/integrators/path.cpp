@@ -269,6 +269,7 @@ int run_path_job(const PathJob& job, const std::string& description) {
   if (job.seed >= 0) scene.render.seed = uint64_t(job.seed);
   scene.render.aovs = job.aovs;
   for (const LoadedMesh& m : scene.loaded_meshes) examples::print_load_warnings(kProgram, m.path, m.report);
+  for (const std::string& w : scene.warnings) warn(w);
 
   // The pixel buffers, checked against the memory available before anything is allocated
   // (issue 15, item 3): the image (3 channels, 10 with AOVs), PNG's tone-mapped copy, and what
