@@ -485,6 +485,39 @@ TEST_F(QueryCliTest, BadTokensAreQuotedShortAndPrintable) {
   for (const char c : r.err) EXPECT_TRUE(c == '\n' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f));
 }
 
+// Coordinates: beyond the query range refused naming the file and line (the library named only
+// "point 1", counting from 0); below float's range read as 0 (1e-400 was "out of range" while
+// 1e-50 read as 0, and the mesh readers read both as 0).
+TEST_F(QueryCliTest, PointCoordinatesBeyondTheRangeAreNamedByLineAndTinyOnesAreZero) {
+  const std::string far = temp_path("far_points.txt"), tiny = temp_path("tiny_points.txt");
+  std::ofstream(far) << "0 0 0\n1e19 0 0\n";
+  std::ofstream(tiny) << "1e-400 -1e-50 0\n";
+  const RunResult refused = run_query(binary_, quote(mesh_path()) + " --points " + quote(far));
+  const RunResult zero = run_query(binary_, quote(mesh_path()) + " --points " + quote(tiny) + " --fields w");
+  std::remove(far.c_str());
+  std::remove(tiny.c_str());
+  ASSERT_TRUE(refused.exited && zero.exited);
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find(far + ":2: coordinate beyond +-1e+18"), std::string::npos) << refused.err;
+  EXPECT_EQ(zero.exit_code, 0) << zero.err;
+  EXPECT_NE(zero.out.find("\n0,-0,0,"), std::string::npos) << zero.out;
+}
+
+// A level w never reaches has no S (|w| < n/2 for n triangles): the fields that read the level
+// are answered (the sdf infinite) with a warning, as gwnrt-trace and gwnrt-mesh give; w alone
+// reads no level and is not warned about.
+TEST_F(QueryCliTest, UnreachableLevelIsWarnedAboutForTheFieldsThatReadIt) {
+  const std::string base = quote(mesh_path()) + " --points " + quote(probe_points_path());
+  const RunResult sdf = run_query(binary_, base + " --fields sdf --level 1e5");
+  const RunResult w = run_query(binary_, base + " --fields w --level 1e5");
+  const RunResult reachable = run_query(binary_, base + " --fields sdf --level 0.5");
+  ASSERT_TRUE(sdf.exited && w.exited && reachable.exited);
+  EXPECT_EQ(sdf.exit_code, 0);
+  EXPECT_NE(sdf.err.find("warning: level 100000 lies outside every value w takes"), std::string::npos) << sdf.err;
+  EXPECT_EQ(w.err.find("warning"), std::string::npos) << w.err;
+  EXPECT_EQ(reachable.err.find("warning"), std::string::npos) << reachable.err;
+}
+
 // The same for a mesh: /dev/zero under a mesh file's name stops at its first byte, no text.
 TEST_F(QueryCliTest, MeshStreamThatNeverEndsStopsAtItsFirstByte) {
   const std::string zero = temp_path("zero.obj");

@@ -5,12 +5,15 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <initializer_list>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
 
+#include "gwnrt/batch.h"
 #include "gwnrt/hd.h"
 #include "gwnrt/io/read_file.h"
 #include "gwnrt/status.h"
@@ -70,11 +73,15 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
       const char* const last = digits.data() + digits.size();
       std::from_chars_result r = std::from_chars(digits.data(), last, value);
       if (r.ec == std::errc::result_out_of_range) {
-        // Tiny magnitudes underflow a float but are fine as coordinates; only overflow is an error.
-        double wide = 0;
-        r = std::from_chars(digits.data(), last, wide);
-        if (r.ec == std::errc() && std::abs(wide) <= 1.0) {
+        // Tiny magnitudes underflow a float but are fine as coordinates (0, as the mesh readers
+        // read them); only overflow is an error. strtod, unlike from_chars, says which it was
+        // beyond double's range too (1e-400 was refused as out of range while 1e-50 read as 0).
+        const std::string text(digits);
+        char* end = nullptr;
+        const double wide = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() + text.size() && std::abs(wide) <= 1.0) {
           value = float(wide);
+          r.ec = std::errc();
         } else {
           return {StatusCode::kParseError, where() + "number out of range: " + quoted_token(token)};
         }
@@ -104,7 +111,15 @@ inline Status parse_points(std::string_view text, const std::string& source, std
   points.clear();
   return parse_rows(
       text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
-      [&](const float* v, int, size_t) {
+      [&](const float* v, int, size_t) -> Status {
+        // The library refuses these too, but names only the point's index: here the file and line.
+        for (int k = 0; k < 3; ++k)
+          if (!(std::fabs(v[k]) <= kMaxQueryCoordinate)) {
+            char limit[32];
+            std::snprintf(limit, sizeof limit, "%g", double(kMaxQueryCoordinate));
+            return {StatusCode::kParseError,
+                    std::string("coordinate beyond +-") + limit + ", the coordinates gwnrt serves"};
+          }
         points.emplace_back(v[0], v[1], v[2]);
         return Status::Ok();
       });

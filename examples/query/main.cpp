@@ -30,6 +30,7 @@
 #include "point_io.h"
 #include "program.h"
 #include "progress_bar.h"
+#include "trace_level.h"
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "gwnrt/cuda.h"
@@ -309,6 +310,15 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
                    gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
                    method_name.c_str());
+  }
+
+  // A level w never reaches has no S: the sdf is then infinite and the projection finds nothing.
+  // Said as gwnrt-trace and gwnrt-mesh say it, for the fields that read the level.
+  if (request.fields & (gwnrt::kFieldSignedDistance | gwnrt::kFieldPseudoDistance | gwnrt::kFieldSheetDistance |
+                        gwnrt::kFieldProjection | gwnrt::kFieldHarnackBound)) {
+    gwnrt::TraceOptions surface;
+    surface.level = request.level;
+    gwnrt::examples::warn_if_level_out_of_reach(kProgram, model.view(), surface);
   }
 
   std::vector<vec3> points;
