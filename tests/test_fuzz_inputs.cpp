@@ -895,6 +895,20 @@ TEST_F(LimitsCli, TraceOptionsAreRefusedByTheirFlag) {
     EXPECT_EQ(r.exit_code, 0) << good << "\n" << r.err;
   }
   EXPECT_GE(ran, 1u) << "gwnrt-trace is not built next to the tests";
+  // The benchmark takes the same three (its --eps had no upper limit, its --level no check).
+  const std::string bench = test::example_binary("gwnrt-bench-trace");
+  if (bench.empty()) return;
+  for (const auto& [flag, values] : bad) {
+    if (flag != "--level" && flag != "--eps" && flag != "--beta") continue;
+    for (const std::string& v : values) {
+      const std::string args = quote(mesh_) + " " + flag + " " + quote(v);
+      SCOPED_TRACE(args);
+      const RunResult r = run_with_timeout(bench, args);
+      expect_clean_exit(r, args);
+      EXPECT_NE(r.exit_code, 0) << r.err;
+      EXPECT_NE(r.err.find(flag + ": must be "), std::string::npos) << r.err;
+    }
+  }
 }
 
 // Issue 15, item 11: every program says what loading skipped (an OBJ line nobody knows), not just

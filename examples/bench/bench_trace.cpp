@@ -249,10 +249,11 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "worker threads (default: all cores)")
       ->check(gwnrt::examples::positive_number());
   app.add_option("--eps", options.epsilon, "stopping distance relative to the box diagonal")
-      ->check(gwnrt::examples::positive_number());
+      ->check(gwnrt::examples::trace_epsilon_number());
   app.add_option("--beta", options.beta, "accuracy scale of gwnrt's multipole evaluation")
-      ->check(gwnrt::examples::positive_number());
-  app.add_option("--level", options.level, "the level w* of S = ∂{w > w*}");
+      ->check(gwnrt::examples::trace_beta_number());
+  app.add_option("--level", options.level, "the level w* of S = ∂{w > w*}")
+      ->check(gwnrt::examples::trace_level_number());
   app.add_option("--check", check,
                  "after the timings, also trace with the brute force up to this many of the rays where (a) and (b) "
                  "disagree or (b) is capped, hits a smooth piece or takes Harnack steps")
