@@ -370,6 +370,28 @@ MeshingOptions options_at(uint32_t resolution) {
   return o;
 }
 
+TEST(Meshing, FarFromTheOriginTheGridStaysOffTheFaces) {
+  // The unit tetrahedron at 1e4 (float steps there are 1e-3): the box's 1e-4 padding fell below
+  // one step, the grid centred on it put corners exactly on the faces, and every resolution gave
+  // zero-area triangles (16 at 8 cells, 92 at 32). Now as at the origin: none, the same counts.
+  Mesh tet;
+  tet.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tet.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  Mesh far = tet;
+  for (vec3& p : far.positions) p += vec3(1e4f);
+  const GwnModel near_model = test::build_model(tet), far_model = test::build_model(far);
+  for (const uint32_t resolution : {8u, 32u}) {
+    SurfaceMesh near_out, far_out;
+    ASSERT_TRUE(extract_surface(near_model, options_at(resolution), near_out).ok());
+    ASSERT_TRUE(extract_surface(far_model, options_at(resolution), far_out).ok());
+    EXPECT_EQ(far_out.triangles.size(), near_out.triangles.size()) << resolution;
+    size_t degenerate = 0;
+    for (const uvec3& t : far_out.triangles)
+      degenerate += is_degenerate_triangle(far_out.positions[t.x], far_out.positions[t.y], far_out.positions[t.z]);
+    EXPECT_EQ(degenerate, 0u) << resolution;
+  }
+}
+
 TEST(Meshing, SphereIsClosedOutwardAndOnS) {
   Mesh sphere = test::make_sphere(5);
   const Mesh reference = sphere;

@@ -30,9 +30,15 @@ GWNRT_HD inline float level_distance(float level) {
 
 // Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
 // the box is rounded differently from the box clip and may fall just outside it.
+// The pad is also at least 4 float steps of the box's coordinates: far from the origin 1e-4 of
+// the diagonal is below one (a unit tetrahedron at 1e4, where steps are 1e-3), the box was not
+// padded at all, and the mesher's grid, centred on it, put its corners exactly on the faces
+// (zero-area triangles at every resolution).
 GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
   Aabb padded = m.bounds;
-  const vec3 pad(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute);
+  const vec3 largest = glm::max(glm::abs(m.bounds.lo), glm::abs(m.bounds.hi));
+  const float steps = 4.0f * 1.1920929e-7f * max_of(largest.x, max_of(largest.y, largest.z));
+  const vec3 pad(max_of(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute, steps));
   padded.lo -= pad;
   padded.hi += pad;
   return padded;
