@@ -168,6 +168,18 @@ TEST(UnreachableLevel, TracesNoSurfaceAndMeshesNothing) {
 // distance the same, positive; the ray along +x from there hits the face at t = k s with normal
 // -x. The tetrahedron at 1e13 gave w = 0.938, at 1e20 NaN, its distances were 1.4-3x too
 // large beyond 1e10 and below 1e-11, its trace normals 0 or NaN.
+// The fields asked for at every point, by one method (ASSERTs that the batch ran).
+std::vector<PointResult> evaluated(const GwnModel& model, const std::vector<vec3>& points, WindingMethod method,
+                                   uint32_t fields) {
+  QueryRequest request;
+  request.method = method;
+  request.fields = fields;
+  std::vector<PointResult> r(points.size());
+  const Status s = evaluate_points(model, points, request, r);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return r;
+}
+
 Mesh scaled_tetrahedron(float s) {
   Mesh tet;
   tet.positions = {{0, 0, 0}, {s, 0, 0}, {0, s, 0}, {0, 0, s}};
@@ -182,13 +194,9 @@ TEST(Scale, EveryAnswerIsRightAcrossTheServedScales) {
       const vec3 outside(-k * s, 0.25f * s, 0.25f * s);
       const vec3 inside(0.2f * s, 0.2f * s, 0.2f * s);
       for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor, WindingMethod::kBrute}) {
-        QueryRequest request;
-        request.method = method;
-        request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldSignedDistance |
-                         kFieldHarnackBound;
-        const std::vector<vec3> points = {outside, inside};
-        std::vector<PointResult> r(points.size());
-        ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+        const std::vector<PointResult> r = evaluated(model, {outside, inside}, method,
+                                                     kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance |
+                                                         kFieldSignedDistance | kFieldHarnackBound);
         const std::string where =
             "scale " + std::to_string(s) + " k " + std::to_string(k) + " method " + std::to_string(int(method));
         EXPECT_NEAR(r[0].w, 0.0f, 2e-3f) << where;  // the tree's promised accuracy
@@ -242,11 +250,8 @@ TEST(Scale, MeshesFarFromTheOriginAreServedWhileFloatResolvesThem) {
     for (vec3& p : tet.positions) p += vec3(o);
     const GwnModel model = build_model(tet);
     const vec3 outside(o - 2.0f, o + 0.25f, o + 0.25f), inside(o + 0.2f, o + 0.2f, o + 0.2f);
-    QueryRequest request;
-    request.fields = kFieldW | kFieldUnsignedDistance | kFieldSignedDistance;
-    const std::vector<vec3> points = {outside, inside};
-    std::vector<PointResult> r(points.size());
-    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    const std::vector<PointResult> r = evaluated(model, {outside, inside}, WindingMethod::kAuto,
+                                                 kFieldW | kFieldUnsignedDistance | kFieldSignedDistance);
     EXPECT_NEAR(r[0].w, 0.0f, 2e-3f) << o;
     EXPECT_NEAR(r[1].w, 1.0f, 2e-3f) << o;
     EXPECT_NEAR(r[0].sdf.distance, 2.0f, 2e-3f) << o;
@@ -331,11 +336,8 @@ TEST(Scale, GradientWithinRoundingOfAVertexOrAnEdgeIsFinite) {
                                     {0.3f, 1e-25f, 0.0f},
                                     {0.0f, 0.4f, 3e-21f}};
   for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor}) {
-    QueryRequest request;
-    request.method = method;
-    request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldPseudoDistance;
-    std::vector<PointResult> r(points.size());
-    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    const std::vector<PointResult> r =
+        evaluated(model, points, method, kFieldW | kFieldGradient | kFieldHessian | kFieldPseudoDistance);
     for (size_t i = 0; i < points.size(); ++i) {
       const std::string where = "point " + std::to_string(i) + " method " + winding_method_name(method);
       const WindingSampleExact e = winding_number_exact(model.triangle_view(), points[i], true);
@@ -364,11 +366,8 @@ TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
   for (float d = 1e2f; d <= 0.5f * kMaxQueryCoordinate; d *= 10.0f)
     points.push_back(box.centre() + vec3(d, 0.3f * d, -0.2f * d));
   for (const WindingMethod method : {WindingMethod::kCrossing, WindingMethod::kTaylor, WindingMethod::kBrute}) {
-    QueryRequest request;
-    request.method = method;
-    request.fields = kFieldW | kFieldGradient | kFieldUnsignedDistance | kFieldSignedDistance;
-    std::vector<PointResult> r(points.size());
-    ASSERT_TRUE(evaluate_points(model, points, request, r).ok());
+    const std::vector<PointResult> r =
+        evaluated(model, points, method, kFieldW | kFieldGradient | kFieldUnsignedDistance | kFieldSignedDistance);
     for (size_t i = 0; i < points.size(); ++i) {
       const double d = glm::length(dvec3(points[i]) - dvec3(box.centre()));
       const double near = d - half_diagonal;
