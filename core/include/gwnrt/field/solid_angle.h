@@ -217,11 +217,18 @@ struct EdgeField {
     f = glm::dot(e, gj_hat - gi_hat);
   }
   GWNRT_HD glm::vec<3, T> gradient() const { return degenerate ? glm::vec<3, T>(0) : c * (f / c2); }
-  // In float: x so near the edge's line (|c| < 1e-15: 1e-20 from a unit mesh's vertex) that
-  // f/|c|² overflows or |c|² is denormal, and 0·inf made the gradient and the Hessian NaN. Such a
-  // triangle is evaluated in double (below). On the line itself (c = 0) the term is 0, as above.
-  GWNRT_HD bool float_underflows() const { return c2 < T(1e-30f) && (c.x != T(0) || c.y != T(0) || c.z != T(0)); }
+  // In float: x so near the edge's line that |c|² is near the denormals (1e-20 from a unit
+  // mesh's vertex: |c|² ~ 1e-40, and 0·inf made the gradient and the Hessian NaN). Such a
+  // triangle is evaluated in double (below), as is one whose float terms overflow. On the line
+  // itself (c = 0) the term is 0, as above. The bound is absolute, well above FLT_MIN (1.2e-38),
+  // and below the |c|² of every point at ordinary distances from a mesh of the smallest size
+  // served (1e-8 across: |c|² ~ 1e-32).
+  GWNRT_HD bool float_underflows() const { return c2 < T(1e-36f) && (c.x != T(0) || c.y != T(0) || c.z != T(0)); }
 };
+
+// Whether every component is finite (a sum of them is not when one is inf or NaN, or when
+// finite ones overflow it, which as well as any is a reason to take the double path).
+GWNRT_HD inline bool finite(const vec3& v) { return is_finite(v.x + v.y + v.z); }
 
 // A double result in float, held within ±1e30: the terms of a triangle evaluated in double
 // because float underflowed, where the Hessian's reach 1e40 (1/|c|²). They are large only by the
@@ -249,11 +256,12 @@ GWNRT_HD inline glm::vec<3, T> triangle_solid_angle_gradient(const glm::vec<3, T
                                                              const glm::vec<3, T>& p2, const glm::vec<3, T>& x) {
   const glm::vec<3, T> g0 = p0 - x, g1 = p1 - x, g2 = p2 - x;
   const detail::EdgeField<T> e01(g0, g1), e12(g1, g2), e20(g2, g0);
+  const glm::vec<3, T> sum = e01.gradient() + e12.gradient() + e20.gradient();
   if constexpr (sizeof(T) == sizeof(float)) {
-    if (e01.float_underflows() || e12.float_underflows() || e20.float_underflows())
+    if (e01.float_underflows() || e12.float_underflows() || e20.float_underflows() || !detail::finite(sum))
       return detail::saturated_float(triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x)));
   }
-  return e01.gradient() + e12.gradient() + e20.gradient();
+  return sum;
 }
 
 // ∇Ω summed over the triangles (apex, a, b) of fans visited in FanCorners' order. Where a
@@ -284,16 +292,6 @@ GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, 
                                                       glm::vec<3, T>& gradient, Sym3<T>& hessian) {
   const glm::vec<3, T> g[3] = {p0 - x, p1 - x, p2 - x};
   const detail::EdgeField<T> edges[3] = {{g[0], g[1]}, {g[1], g[2]}, {g[2], g[0]}};
-  if constexpr (sizeof(T) == sizeof(float)) {
-    if (edges[0].float_underflows() || edges[1].float_underflows() || edges[2].float_underflows()) {
-      dvec3 gd;
-      Sym3<double> hd;
-      triangle_solid_angle_derivatives(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x), gd, hd);
-      gradient = detail::saturated_float(gd);
-      hessian = detail::saturated_float(hd);
-      return;
-    }
-  }
   gradient = glm::vec<3, T>(0);
   hessian = Sym3<T>{};
   for (const detail::EdgeField<T>& edge : edges) {
@@ -313,6 +311,17 @@ GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, 
     hessian.xy += T(0.5) * (c.x * v.y + v.x * c.y);
     hessian.xz += T(0.5) * (c.x * v.z + v.x * c.z);
     hessian.yz += T(0.5) * (c.y * v.z + v.y * c.z);
+  }
+  if constexpr (sizeof(T) == sizeof(float)) {
+    if (edges[0].float_underflows() || edges[1].float_underflows() || edges[2].float_underflows() ||
+        !detail::finite(gradient) ||
+        !detail::finite(glm::vec<3, T>(hessian.xx + hessian.yy + hessian.zz, hessian.xy + hessian.xz, hessian.yz))) {
+      dvec3 gd;
+      Sym3<double> hd;
+      triangle_solid_angle_derivatives(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x), gd, hd);
+      gradient = detail::saturated_float(gd);
+      hessian = detail::saturated_float(hd);
+    }
   }
 }
 
