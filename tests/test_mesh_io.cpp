@@ -876,6 +876,14 @@ TEST_F(TempFiles, StreamsThatAreNotTextStopAtTheirFirstBytes) {
     EXPECT_EQ(s.message().rfind(path + ":", 0), 0u) << s.message();
     EXPECT_NE(s.message().find(": binary content (byte 0x"), std::string::npos) << s.message();
   }
+  // A terminal colour's escape in a comment is found in text files (the OBJ reader skips comments).
+  const std::string coloured = write("coloured.obj",
+                                     "# \x1b[1mtetrahedron\x1b[0m\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                     "v 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  Mesh tet;
+  const Status loaded = load_mesh(coloured, tet);
+  EXPECT_TRUE(loaded.ok()) << loaded.message();
+  EXPECT_EQ(tet.triangles.size(), 4u);
   // A control byte after the first 64 KiB is left to the reader (the OBJ reader names its line).
   const std::string late = write("late.obj", std::string(70000, '\n') + "v 0 0 0\x01\n");
   Mesh m;

@@ -309,6 +309,26 @@ TEST(Scale, RaysFromFarAwayHitWhereRaysFromNearbyDo) {
       EXPECT_NEAR(hits[k].t, distance, 1.2e-7 * distance) << where;
     }
   }
+  // A far ray's tnear and tfar are where they say: from -1e8 along +x, the tetrahedron moved to
+  // x in [2, 3] (its centre 1e8 + 2.5 ahead: a float shift rounded that by 2.5, and the ray
+  // started inside the mesh, hitting its far side, or ended past its first face).
+  {
+    Mesh moved = scaled_tetrahedron(1.0f);
+    for (vec3& p : moved.positions) p.x += 2.0f;
+    const GwnModel moved_model = build_model(moved);
+    std::vector<Ray> rays(2);
+    for (Ray& r : rays) {
+      r.origin = vec3(-1e8f, 0.1f, 0.2f);
+      r.direction = vec3(1, 0, 0);
+    }
+    rays[0].tnear = 1e8f;  // starts at x = 0
+    rays[1].tfar = 1e8f;   // ends at x = 0
+    std::vector<RayHit> hits(rays.size());
+    ASSERT_TRUE(trace_rays(moved_model, rays, TraceOptions{}, hits).ok());
+    ASSERT_TRUE(hits[0].hit);
+    EXPECT_NEAR(hits[0].position.x, 2.0f, 1e-5f);  // the face x = 2, entered
+    EXPECT_FALSE(hits[1].hit);
+  }
   // Along a general direction from 1e4 (the far origin's rounding moves the line by 1e-3 there).
   for (int line = 0; line < 40; ++line) {
     const vec3 target(rng.uniform(0.05f, 0.3f), rng.uniform(0.05f, 0.3f), rng.uniform(0.05f, 0.3f));

@@ -105,7 +105,9 @@ Status check_mesh_scale(const Mesh& mesh) {
                 largest_vertex, ", counting from 0), where float coordinates step by ",
                 std::nextafter(largest, kMaxMeshCoordinate * 2.0f) - largest,
                 "; gwnrt computes in float and needs the box's diagonal to be at least ", kMinMeshExtentPerCoordinate,
-                " of its largest coordinate: translate the mesh near the origin")};
+                " of its largest coordinate: translate the mesh near the origin",
+                across < kMinMeshExtent ? cat(" (and scale it up: its box is below ", kMinMeshExtent, " across)")
+                                        : std::string())};
   if (!mesh.triangles.empty() && across < kMinMeshExtent)
     return {StatusCode::kInvalidMesh, cat("mesh: its box is ", across, " across; ", range, ": scale the mesh up")};
   return Status::Ok();

@@ -102,7 +102,9 @@ Status read_stream(std::FILE* f, const std::string& name, uint64_t size_hint, co
       }
       for (const size_t sniff_to = std::min(checked_to, kSniffBytes); sniffed < sniff_to; ++sniffed) {
         const auto b = static_cast<unsigned char>(data[sniffed]);
-        if (b < 0x20 && b != '\n' && b != '\r' && b != '\t' && b != '\v' && b != '\f') {
+        // Whitespace and the escape of terminal colours in a comment (0x1b) are found in text; the
+        // other control bytes not.
+        if (b < 0x20 && b != '\n' && b != '\r' && b != '\t' && b != '\v' && b != '\f' && b != 0x1b) {
           const char hex[] = "0123456789abcdef", byte[3] = {hex[b >> 4], hex[b & 15], 0};
           const size_t line = 1 + size_t(std::count(data.begin(), data.begin() + sniffed, '\n'));
           return {StatusCode::kParseError,

@@ -230,13 +230,15 @@ struct EdgeField {
 // finite ones overflow it, which as well as any is a reason to take the double path).
 GWNRT_HD inline bool finite(const vec3& v) { return is_finite(v.x + v.y + v.z); }
 
-// A double result in float, held within ±1e30: the terms of a triangle evaluated in double
+// A double result in float, held within ±1e37: the terms of a triangle evaluated in double
 // because float underflowed, where the Hessian's reach 1e40 (1/|c|²). They are large only by the
 // edge whose line x nearly lies on, and that edge's terms in the two triangles that share it are
 // exact negatives, so held at the same bound they still cancel (to 0 on a closed mesh), and a sum
-// of up to 1e8 of them stays finite; at float's own limit two made inf and then NaN.
+// of up to 30 of them stays finite; at float's own limit two made inf and then NaN. The bound is
+// far above any term that is not on its way to infinity: at 1e30 (1e-15 from an edge's line) it
+// cut a mesh 1e-7 across's Hessians, whose neighbouring triangles' terms cancel there.
 GWNRT_HD inline float saturated_float(double v) {
-  constexpr double kMax = 1e30;
+  constexpr double kMax = 1e37;
   return float(v > kMax ? kMax : (v < -kMax ? -kMax : v));
 }
 GWNRT_HD inline vec3 saturated_float(const dvec3& v) {

@@ -62,11 +62,13 @@ class SurfaceTracer {
     vec3 origin = ray.origin;
     if (ahead > kFarRayDiagonals * double(diagonal)) {
       origin = vec3(dvec3(ray.origin) + ahead * dvec3(dir_));
-      t_shift_ = float(ahead);
+      t_shift_ = ahead;
     }
     frame_ = make_ray_frame(origin, dir_);
-    t_near_ = ray.tnear * len - t_shift_;
-    t_far_ = ray.tfar * len - t_shift_;
+    // In double: the shift is exact there, and rounded to float it moved a far ray's tnear or tfar
+    // by up to half a float step of the distance (4 at 1e8), past a whole unit cube.
+    t_near_ = float(double(ray.tnear) * double(len) - t_shift_);
+    t_far_ = float(double(ray.tfar) * double(len) - t_shift_);
     sheets_ = o.mode == TraceMode::kWindingNumber;
     smooth_ = m.cone.triangle_count > 0;
     eps_ = o.epsilon * diagonal;
@@ -160,7 +162,7 @@ class SurfaceTracer {
   GWNRT_HD bool offer(float t, HitKind kind, const vec3& normal, uint32_t triangle) {
     hit_.hit = true;
     hit_.kind = kind;
-    hit_.t = (t + t_shift_) / len_;
+    hit_.t = float((double(t) + t_shift_) / double(len_));
     hit_.position = point(t);
     hit_.normal = normal;
     hit_.triangle = triangle;
@@ -325,7 +327,7 @@ class SurfaceTracer {
   RayFrame frame_{};
   vec3 dir_{0.0f};
   float len_ = 1.0f, t_near_ = 0.0f, t_far_ = 0.0f, t_end_ = 0.0f, eps_ = 0.0f, phase_ = 0.5f;
-  float t_shift_ = 0.0f;  // where the ray's own origin lies, in t from the one traced from
+  double t_shift_ = 0.0;  // where the ray's own origin lies, in t from the one traced from
   bool sheets_ = false, smooth_ = false;
   int band_ = 0;  // floor(w - w*) just after the last event
   bool have_next_ = false;
