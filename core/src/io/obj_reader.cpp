@@ -101,14 +101,8 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
     p = nl ? nl + 1 : end;
 
     // Text only: a control byte (other than whitespace) means the file is not an OBJ at all.
-    for (const char* c = tk.p; c < tk.end; ++c) {
-      const auto b = static_cast<unsigned char>(*c);
-      if (b < 0x20 && !is_blank(*c)) {
-        const char hex[] = "0123456789abcdef";
-        const char byte[3] = {hex[b >> 4], hex[b & 15], 0};
-        return {StatusCode::kParseError, at("binary content (byte 0x", byte, "): not a text OBJ file")};
-      }
-    }
+    for (const char* c = tk.p; c < tk.end; ++c)
+      if (is_binary_byte(*c)) return {StatusCode::kParseError, at(binary_byte_text(*c), ": not a text OBJ file")};
     string_view kw;
     if (!tk.next(kw)) continue;
     if (kw == "v") {

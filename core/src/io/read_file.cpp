@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "gwnrt/io/memory.h"
+#include "io/text.h"
 #include "message.h"
 
 namespace gwnrt {
@@ -23,6 +24,7 @@ std::string quoted_token(std::string_view token) {
   }
   return s + (token.size() > kMax ? "...'" : "'");
 }
+
 namespace {
 
 struct FileCloser {
@@ -68,7 +70,8 @@ Status read_stream(std::FILE* f, const std::string& name, uint64_t size_hint, co
   size_t text_end = limits.text_end ? kTextNotEnded : kAllText;
   // The text's first 64 KiB are checked for control bytes as they arrive: /dev/urandom (whose
   // newlines kept every line short) was read until memory ran out (300 MB/s, 23 GB) before the
-  // reader said it was not text. A text file has none there; '#' comments with them are lost.
+  // reader said it was not text. A text file has none there (a file with them in its comments
+  // is refused too).
   constexpr size_t kSniffBytes = size_t(1) << 16;
   size_t sniffed = 0;
   // The hint may be wrong (the file may change) and is none for a stream; one spare byte lets the
@@ -101,14 +104,11 @@ Status read_stream(std::FILE* f, const std::string& name, uint64_t size_hint, co
                     " (not a text file, or a stream that never ends a line)")};
       }
       for (const size_t sniff_to = std::min(checked_to, kSniffBytes); sniffed < sniff_to; ++sniffed) {
-        const auto b = static_cast<unsigned char>(data[sniffed]);
-        // Whitespace and the escape of terminal colours in a comment (0x1b) are found in text; the
-        // other control bytes not.
-        if (b < 0x20 && b != '\n' && b != '\r' && b != '\t' && b != '\v' && b != '\f' && b != 0x1b) {
-          const char hex[] = "0123456789abcdef", byte[3] = {hex[b >> 4], hex[b & 15], 0};
+        // The escape of terminal colours (0x1b) is found in comments; no other binary byte is.
+        const char c = data[sniffed];
+        if (io::is_binary_byte(c) && c != '\x1b') {
           const size_t line = 1 + size_t(std::count(data.begin(), data.begin() + sniffed, '\n'));
-          return {StatusCode::kParseError,
-                  cat(name, ":", line, ": binary content (byte 0x", byte, "): not a text file")};
+          return {StatusCode::kParseError, cat(name, ":", line, ": ", io::binary_byte_text(c), ": not a text file")};
         }
       }
     }

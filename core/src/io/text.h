@@ -79,6 +79,16 @@ inline IntParse parse_int(string_view s, int64_t& out) {
 
 inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
+// A byte that text does not hold: a control byte other than whitespace and the newline.
+inline bool is_binary_byte(char c) { return static_cast<unsigned char>(c) < 0x20 && !is_blank(c) && c != '\n'; }
+
+// "binary content (byte 0x1a)": how the readers name such a byte.
+inline std::string binary_byte_text(char c) {
+  const auto b = static_cast<unsigned char>(c);
+  const char hex[] = "0123456789abcdef", byte[3] = {hex[b >> 4], hex[b & 15], 0};
+  return cat("binary content (byte 0x", byte, ")");
+}
+
 // Whitespace-separated tokens of one line.
 struct LineTokens {
   const char* p;
