@@ -95,8 +95,7 @@ std::vector<uint64_t> spatial_order(const Aabb& box, std::span<const vec3> point
 Status validate_points(std::span<const vec3> points) {
   for (size_t i = 0; i < points.size(); ++i) {
     const vec3& p = points[i];
-    if (!(std::fabs(p.x) <= kMaxQueryCoordinate && std::fabs(p.y) <= kMaxQueryCoordinate &&
-          std::fabs(p.z) <= kMaxQueryCoordinate))
+    if (!query_point_served(p))
       return {StatusCode::kInvalidArgument,
               cat("point ", i, " (", p.x, ", ", p.y, ", ", p.z, ") is not finite or lies beyond +-",
                   kMaxQueryCoordinate, ", the coordinates gwnrt serves (its squared distances would overflow float)")};

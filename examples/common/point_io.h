@@ -113,14 +113,14 @@ inline Status parse_points(std::string_view text, const std::string& source, std
       text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
       [&](const float* v, int, size_t) -> Status {
         // The library refuses these too, but names only the point's index: here the file and line.
-        for (int k = 0; k < 3; ++k)
-          if (!(std::fabs(v[k]) <= kMaxQueryCoordinate)) {
-            char limit[32];
-            std::snprintf(limit, sizeof limit, "%g", double(kMaxQueryCoordinate));
-            return {StatusCode::kParseError,
-                    std::string("coordinate beyond +-") + limit + ", the coordinates gwnrt serves"};
-          }
-        points.emplace_back(v[0], v[1], v[2]);
+        const vec3 p(v[0], v[1], v[2]);
+        if (!query_point_served(p)) {
+          char limit[32];
+          std::snprintf(limit, sizeof limit, "%g", double(kMaxQueryCoordinate));
+          return {StatusCode::kParseError,
+                  std::string("coordinate beyond +-") + limit + ", the coordinates gwnrt serves"};
+        }
+        points.push_back(p);
         return Status::Ok();
       });
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <span>
 
 #include "gwnrt/geometry/model.h"
@@ -31,6 +32,11 @@ Status evaluate_points_to_columns(const GwnModel& model, std::span<const vec3> p
 // the sdf negative; within it, measured on the limits of kMaxMeshCoordinate and
 // kMinMeshExtent, w, the distances and the sdf are right). Names the first point that is not.
 inline constexpr float kMaxQueryCoordinate = 1e18f;
+// Whether `p` is such a point (NaN and inf are not).
+inline bool query_point_served(const vec3& p) {
+  return std::fabs(p.x) <= kMaxQueryCoordinate && std::fabs(p.y) <= kMaxQueryCoordinate &&
+         std::fabs(p.z) <= kMaxQueryCoordinate;
+}
 Status validate_points(std::span<const vec3> points);
 
 // Order, beta, level and Newton options; with `view`, also that it holds the parts the request
