@@ -229,6 +229,7 @@ struct EdgeField {
 // Whether every component is finite (a sum of them is not when one is inf or NaN, or when
 // finite ones overflow it, which as well as any is a reason to take the double path).
 GWNRT_HD inline bool finite(const vec3& v) { return is_finite(v.x + v.y + v.z); }
+GWNRT_HD inline bool finite(const Sym3<float>& h) { return is_finite(h.xx + h.xy + h.xz + h.yy + h.yz + h.zz); }
 
 // A double result in float, held within ±1e37: the terms of a triangle evaluated in double
 // because float underflowed, where the Hessian's reach 1e40 (1/|c|²). They are large only by the
@@ -316,8 +317,7 @@ GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, 
   }
   if constexpr (sizeof(T) == sizeof(float)) {
     if (edges[0].float_underflows() || edges[1].float_underflows() || edges[2].float_underflows() ||
-        !detail::finite(gradient) ||
-        !detail::finite(glm::vec<3, T>(hessian.xx + hessian.yy + hessian.zz, hessian.xy + hessian.xz, hessian.yz))) {
+        !detail::finite(gradient) || !detail::finite(hessian)) {
       dvec3 gd;
       Sym3<double> hd;
       triangle_solid_angle_derivatives(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x), gd, hd);

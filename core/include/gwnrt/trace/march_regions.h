@@ -3,6 +3,8 @@
 // the Embree bounds callback reports. Used by the tracer, the signed distance and the plugin.
 #pragma once
 
+#include <cfloat>
+
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/hd.h"
 #include "gwnrt/trace/trace_types.h"
@@ -37,7 +39,7 @@ GWNRT_HD inline float level_distance(float level) {
 GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
   Aabb padded = m.bounds;
   const vec3 largest = glm::max(glm::abs(m.bounds.lo), glm::abs(m.bounds.hi));
-  const float steps = 4.0f * 1.1920929e-7f * max_of(largest.x, max_of(largest.y, largest.z));
+  const float steps = 4.0f * FLT_EPSILON * max_of(largest.x, max_of(largest.y, largest.z));
   const vec3 pad(max_of(kBoxPad * glm::length(m.bounds.hi - m.bounds.lo) + kBoxPadAbsolute, steps));
   padded.lo -= pad;
   padded.hi += pad;

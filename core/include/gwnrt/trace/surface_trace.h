@@ -57,8 +57,7 @@ class SurfaceTracer {
     // points along the ray then step as finely as the mesh's coordinates do, where from 1e8 they
     // stepped by 8 and a unit tetrahedron was missed. Nearer rays are left as they are (a shift
     // would only move their rounding). The hit's t adds the shift back.
-    const vec3 centre = 0.5f * (m.bounds.lo + m.bounds.hi);
-    const double ahead = glm::dot(dvec3(centre) - dvec3(ray.origin), dvec3(dir_));
+    const double ahead = glm::dot(dvec3(m.bounds.centre()) - dvec3(ray.origin), dvec3(dir_));
     vec3 origin = ray.origin;
     if (ahead > kFarRayDiagonals * double(diagonal)) {
       origin = vec3(dvec3(ray.origin) + ahead * dvec3(dir_));
