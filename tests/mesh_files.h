@@ -101,7 +101,9 @@ struct PlyTypes {
 
 // The mesh with distractions: an unknown element before and after, extra scalar and list
 // properties on vertices, and extra properties on both sides of the face list.
-inline std::string small_ply(std::string_view format, const std::vector<vec3>& pos, const PlyTypes& t = {}) {
+// `Position` is vec3 or dvec3 (coordinates written at the file's type, from double).
+template <class Position>
+std::string small_ply(std::string_view format, const std::vector<Position>& pos, const PlyTypes& t = {}) {
   const Small s;
   std::string h;
   auto line = [&](const std::string& l) { h += l + t.eol; };

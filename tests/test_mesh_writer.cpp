@@ -461,6 +461,87 @@ TEST_F(MeshWriter, InvalidMeshLeavesAnExistingFileAlone) {
 }
 
 // ---------------------------------------------------------------------------------------
+// MeshWriteOptions::origin: positions in the input's coordinates, in double.
+
+double le_f64(const std::string& b, size_t off) {
+  return std::bit_cast<double>(uint64_t(le_u32(b, off + 4)) << 32 | le_u32(b, off));
+}
+
+// A recentred scan's origin (UTM metres): float steps by 0.25 there, double by 9.3e-10.
+const dvec3 kScanOrigin(512344.0, 4123464.0, 120.0);
+
+TEST_F(MeshWriter, OriginIsAddedInDoubleToPlyPositions) {
+  const SurfaceMesh m = cube();
+  for (const bool soup : {false, true}) {
+    SCOPED_TRACE(soup ? "soup" : "indexed");
+    ASSERT_TRUE(write_surface_mesh(path("far.ply"), m, {.soup = soup, .origin = kScanOrigin}).ok());
+    const std::string b = read_bytes(path("far.ply"));
+    const std::string xyz = "property double x\nproperty double y\nproperty double z\nproperty float nx\n";
+    EXPECT_NE(b.find(xyz), std::string::npos);
+    const size_t body = b.find("end_header\n") + 11;
+    // x y z as doubles, then normals, colours, uvs, source triangle and barycentrics as before.
+    const size_t record = 3 * 8 + 3 * 4 + 4 + 2 * 4 + 4 + 2 * 4;
+    for (size_t j = 0; j < output_vertex_count(m, soup); ++j) {
+      const uint32_t i = source_vertex(m, soup, j);
+      for (int k = 0; k < 3; ++k)
+        EXPECT_EQ(le_f64(b, body + j * record + 8 * k), kScanOrigin[k] + double(m.positions[i][k])) << j;
+      EXPECT_EQ(le_f32(b, body + j * record + 24), m.normals[i].x) << j;
+    }
+    // Read back recentred, the positions come back where they were written to float's resolution
+    // of the cube's size, not of 4e6.
+    Mesh back;
+    MeshLoadReport r;
+    ASSERT_TRUE(load_mesh(path("far.ply"), back, &r, {.recentre = true}).ok());
+    ASSERT_NE(r.origin, dvec3(0.0));
+    for (size_t j = 0; j < back.positions.size(); ++j)
+      EXPECT_LT(glm::length(r.origin + dvec3(back.positions[j]) -
+                            (kScanOrigin + dvec3(m.positions[source_vertex(m, soup, j)]))),
+                1e-6)
+          << j;
+  }
+}
+
+TEST_F(MeshWriter, OriginIsAddedInDoubleToObjPositions) {
+  const SurfaceMesh m = cube();
+  ASSERT_TRUE(write_surface_mesh(path("far.obj"), m, {.origin = kScanOrigin}).ok());
+  std::istringstream in(read_bytes(path("far.obj")));
+  std::string line;
+  size_t j = 0;
+  while (std::getline(in, line)) {
+    if (!line.starts_with("v ")) continue;
+    std::istringstream ls(line.substr(2));
+    std::string tok;
+    for (int k = 0; k < 6 && ls >> tok; ++k) {
+      double x = 0;
+      const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), x);
+      ASSERT_TRUE(ec == std::errc() && ptr == tok.data() + tok.size()) << tok;
+      if (k < 3) {
+        EXPECT_EQ(x, kScanOrigin[k] + double(m.positions[j][k])) << "vertex " << j;
+      } else {
+        EXPECT_EQ(float(x), std::clamp(m.colors[j][k - 3], 0.0f, 1.0f)) << "vertex " << j;  // colours as before
+      }
+    }
+    ++j;
+  }
+  EXPECT_EQ(j, m.positions.size());
+}
+
+TEST_F(MeshWriter, ZeroOriginWritesFloatsAndABadOneIsRefused) {
+  const SurfaceMesh m = cube();
+  for (const char* name : {"a.ply", "a.obj"}) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(write_surface_mesh(path(name), m).ok());
+    const std::string plain = read_bytes(path(name));
+    ASSERT_TRUE(write_surface_mesh(path(name), m, {.origin = dvec3(0.0)}).ok());
+    EXPECT_EQ(read_bytes(path(name)), plain);
+  }
+  const std::string file = path("nan_origin.ply");
+  expect_error(write_surface_mesh(file, m, {.origin = {1.0, std::nan(""), 0.0}}), StatusCode::kInvalidArgument, file,
+               "origin");
+  EXPECT_FALSE(fs::exists(file));
+}
+
+// ---------------------------------------------------------------------------------------
 // Assimp, an independent reader: counts, positions, normals, texture coordinates, colours.
 
 #if GWNRT_HAVE_ASSIMP

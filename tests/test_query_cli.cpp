@@ -3,11 +3,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -317,21 +321,6 @@ std::string write_hemisphere_obj() {
   return path;
 }
 
-// Rows as text cells: sdf_piece is a word, not a number.
-std::vector<std::vector<std::string>> csv_cells(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::string cell;
-    std::istringstream ls(line);
-    while (std::getline(ls, cell, ',')) cells.push_back(cell);
-    rows.push_back(cells);
-  }
-  return rows;
-}
-
 float cell_float(const std::string& c) {
   char* end = nullptr;
   const float v = std::strtof(c.c_str(), &end);
@@ -364,7 +353,8 @@ TEST_F(QueryCliTest, SignedDistanceFieldsMatchLibraryAtAnyLevel) {
     const RunResult r = run_query(binary_, args);
     ASSERT_TRUE(r.exited);
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const std::vector<std::vector<std::string>> rows = csv_cells(r.out);
+    // Cells as text: sdf_piece is a word.
+    const std::vector<std::vector<std::string>> rows = test::csv_rows(r.out);
     ASSERT_EQ(rows.size(), points.size() + 1);
     EXPECT_EQ(rows[0], expected_header);
 
@@ -540,6 +530,209 @@ TEST_F(QueryCliTest, UnknownObjStatementsAreWarnedAbout) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("gwnrt-query: " + mesh + ": warning: 1 line with an unknown statement"), std::string::npos)
       << r.err;
+}
+
+// Georeferenced input (MeshLoadOptions::recentre): bunny_holes.obj and its probe points moved to
+// UTM-like coordinates, where float steps by 0.25 to 0.5 (y = 4e6) and GwnModel::build refused
+// the mesh. The program computes about the mesh's own centre (the origin) and writes positions
+// back in the input's coordinates.
+using test::kUtm;
+
+struct FarCopy {
+  std::string mesh, points;
+  ~FarCopy() {
+    std::remove(mesh.c_str());
+    std::remove(points.c_str());
+  }
+};
+
+// The moved mesh and probe points, written with 17 significant digits.
+void write_far_copy(FarCopy& copy) {
+  copy.mesh = temp_path("utm_bunny.obj");
+  copy.points = temp_path("utm_points.txt");
+  test::write_translated(mesh_path(), copy.mesh, kUtm, true);
+  test::write_translated(probe_points_path(), copy.points, kUtm, false);
+}
+
+constexpr const char* kFarFields = "all,sdf,sdf1,sdf2,sheet_dist,proj,hbound";
+
+// The same answers as about the origin, to the float rounding of the inputs: each run rounds the
+// mesh's corners and the points, in its own model coordinates (within s = |p| + 16 of its
+// origin: the bunny lies within 10 of (0, 0, 0) and within 16 of the recentred origin), to
+// delta = 2^-24 s, and the origin is not the translation, so the two models differ by that
+// rounding (they are not bit-identical copies). Then, with slack for each run's own rounding:
+// - positions (x y z, proj_*) are the untranslated ones + the translation: the points to 2
+//   delta (each run's rounding of the same point); the Newton projection to 1e-4 of its walk
+//   (its steps (w - w*) grad w / |grad w|^2 divide w's rounding, 2e-7 here, by |grad w|, down
+//   to 1e-3 on the far points: 1.3e-4 on a walk of 9.6) + 16 delta;
+// - distances (udist, bdist, sdf, sheet_dist, hbound), 1-Lipschitz in the point and in each
+//   corner: 16 delta (observed: under 0.14 of it);
+// - w: the crossing method's 1e-5 for each run (MethodsAgreeAndCrossingIsExact) + 16 delta
+//   |grad w|; the gradient: 1e-5 relative + 16 delta |H|; the Hessian 1e-3 relative (+ 1e-5);
+//   sdf1 and sdf2, ratios of w and its derivatives: 1e-4 relative + 16 delta;
+// - the sdf's piece, the Newton iterations and whether they converged: equal.
+// Observed, the largest ratio of a difference to its tolerance is 0.13 (bdist of a far point).
+TEST_F(QueryCliTest, FarOffMeshAnswersAsTheSameMeshAtTheOrigin) {
+  FarCopy far;
+  write_far_copy(far);
+  const RunResult near_run =
+      run_query(binary_, quote(mesh_path()) + " --points " + quote(probe_points_path()) + " --fields " + kFarFields);
+  const RunResult far_run =
+      run_query(binary_, quote(far.mesh) + " --points " + quote(far.points) + " --fields " + kFarFields);
+  ASSERT_TRUE(near_run.exited && far_run.exited);
+  ASSERT_EQ(near_run.exit_code, 0) << near_run.err;
+  ASSERT_EQ(far_run.exit_code, 0) << far_run.err;
+  const auto a = test::csv_rows(near_run.out), b = test::csv_rows(far_run.out);
+  ASSERT_EQ(a.size(), load_points(probe_points_path()).size() + 1);
+  ASSERT_EQ(b.size(), a.size());
+  ASSERT_EQ(b[0], a[0]);
+  std::map<std::string, size_t> col;
+  for (size_t j = 0; j < a[0].size(); ++j) col[a[0][j]] = j;
+
+  for (size_t i = 1; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].size(), a[0].size());
+    ASSERT_EQ(b[i].size(), a[0].size());
+    const auto near = [&](const char* c) { return test::cell_double(a[i][col.at(c)]); };
+    const auto far = [&](const char* c) { return test::cell_double(b[i][col.at(c)]); };
+    const dvec3 p(near("x"), near("y"), near("z"));
+    const double delta = std::ldexp(std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) + 16.0, -24);
+    const double grad = glm::length(dvec3(near("gx"), near("gy"), near("gz")));
+    double hess = 0;
+    for (const char* h : {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"}) hess = std::max(hess, std::fabs(near(h)));
+    const double travel = glm::distance(dvec3(near("proj_x"), near("proj_y"), near("proj_z")), p);
+    const auto expect_close = [&](const char* c, double tolerance) {
+      if (std::isinf(near(c)) && far(c) == near(c)) return;
+      EXPECT_LE(std::fabs(far(c) - near(c)), tolerance)
+          << c << ", row " << i << ": " << b[i][col.at(c)] << " vs " << a[i][col.at(c)];
+    };
+    const auto expect_moved = [&](const char* c, int axis, double tolerance) {
+      EXPECT_LE(std::fabs(far(c) - (near(c) + kUtm[axis])), tolerance)
+          << c << ", row " << i << ": " << b[i][col.at(c)] << " vs " << a[i][col.at(c)] << " + " << kUtm[axis];
+    };
+    for (int k = 0; k < 3; ++k) {
+      expect_moved(std::array{"x", "y", "z"}[k], k, 2 * delta);
+      expect_moved(std::array{"proj_x", "proj_y", "proj_z"}[k], k, 1e-4 * (1 + travel) + 16 * delta);
+    }
+    for (const char* c : {"udist", "bdist", "sdf", "sheet_dist", "hbound"}) expect_close(c, 16 * delta);
+    expect_close("w", 2e-5 + 16 * delta * grad);
+    for (const char* c : {"gx", "gy", "gz"}) expect_close(c, 1e-5 * grad + 16 * delta * hess);
+    for (const char* c : {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"}) expect_close(c, 1e-3 * hess + 1e-5);
+    for (const char* c : {"sdf1", "sdf2"}) expect_close(c, 1e-4 * std::fabs(near(c)) + 16 * delta);
+    for (const char* c : {"sdf_piece", "proj_iters", "proj_converged"})
+      EXPECT_EQ(b[i][col.at(c)], a[i][col.at(c)]) << c << ", row " << i;
+  }
+}
+
+// Exactly the library's answers on the recentred mesh (load_mesh with recentre, the points moved
+// by -origin in double and rounded to float): the positions as expect_position_reads_back says,
+// the other columns to the bit as ever. A point read from the input is written back as it was given (the probe
+// points' 5 decimals + the translation's 3: fewer digits than their floats resolve).
+TEST_F(QueryCliTest, FarOffPositionsAreWrittenInTheInputsCoordinates) {
+  FarCopy far;
+  far.mesh = temp_path("utm_bunny.obj");
+  far.points = temp_path("utm_points.txt");
+  test::write_translated(mesh_path(), far.mesh, kUtm, true);
+  std::vector<dvec3> given;
+  {
+    std::ofstream out(far.points);
+    for (const vec3& q : load_points(probe_points_path())) {
+      char line[96];
+      std::snprintf(line, sizeof line, "%.5f %.5f %.5f\n", double(q.x) + kUtm[0], double(q.y) + kUtm[1],
+                    double(q.z) + kUtm[2]);
+      out << line;
+      std::istringstream ls(line);
+      dvec3 g;
+      ls >> g.x >> g.y >> g.z;
+      given.push_back(g);
+    }
+  }
+  const RunResult r =
+      run_query(binary_, quote(far.mesh) + " --points " + quote(far.points) + " --fields " + kFarFields);
+  ASSERT_TRUE(r.exited);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = test::csv_rows(r.out);
+  ASSERT_EQ(rows.size(), given.size() + 1);
+
+  Mesh mesh;
+  MeshLoadReport report;
+  MeshLoadOptions options;
+  options.recentre = true;
+  ASSERT_TRUE(load_mesh(far.mesh, mesh, &report, options).ok());
+  const dvec3 origin = report.origin;
+  ASSERT_NE(origin, dvec3(0.0));
+  {
+    // The mesh is one GwnModel::build refuses where it lies.
+    Mesh as_is;
+    ASSERT_TRUE(load_mesh(far.mesh, as_is).ok());
+    GwnModel refused;
+    const Status s = GwnModel::build(std::move(as_is), refused);
+    EXPECT_NE(s.message().find("translate the mesh near the origin"), std::string::npos) << s.message();
+  }
+  const GwnModel model = test::build_model(std::move(mesh));
+  std::vector<vec3> points;
+  for (const dvec3& g : given) points.push_back(vec3(g - origin));
+  QueryRequest request;
+  request.fields = kFieldW | kFieldGradient | kFieldHessian | kFieldUnsignedDistance | kFieldBoundaryDistance |
+                   kFieldSignedDistance | kFieldPseudoDistance | kFieldSheetDistance | kFieldProjection |
+                   kFieldHarnackBound;
+  std::vector<PointResult> e(points.size());
+  ASSERT_TRUE(evaluate_points(model, points, request, e).ok());
+
+  std::map<std::string, size_t> col;
+  for (size_t j = 0; j < rows[0].size(); ++j) col[rows[0][j]] = j;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::vector<std::string>& row = rows[i + 1];
+    ASSERT_EQ(row.size(), rows[0].size());
+    const auto cell = [&](const char* c) { return test::cell_double(row[col.at(c)]); };
+    for (int k = 0; k < 3; ++k) {
+      const char* xyz = std::array{"x", "y", "z"}[k];
+      EXPECT_EQ(cell(xyz), given[i][k]) << "row " << i << ": " << row[col.at(xyz)];
+      test::expect_position_reads_back(row[col.at(xyz)], origin[k], points[i][k]);
+      test::expect_position_reads_back(row[col.at(std::array{"proj_x", "proj_y", "proj_z"}[k])], origin[k],
+                                       e[i].projection.point[k]);
+    }
+    EXPECT_EQ(float(cell("w")), e[i].w) << "row " << i;
+    EXPECT_EQ(float(cell("gy")), e[i].gradient.y) << "row " << i;
+    EXPECT_EQ(float(cell("hxz")), e[i].hessian.xz) << "row " << i;
+    EXPECT_EQ(float(cell("udist")), e[i].unsigned_distance) << "row " << i;
+    EXPECT_EQ(float(cell("bdist")), e[i].boundary_distance) << "row " << i;
+    EXPECT_EQ(float(cell("sdf")), e[i].sdf.distance) << "row " << i;
+    EXPECT_EQ(float(cell("sdf1")), e[i].sdf.first_order) << "row " << i;
+    EXPECT_EQ(float(cell("hbound")), e[i].harnack_bound) << "row " << i;
+    EXPECT_EQ(cell("proj_iters"), double(e[i].projection.iterations)) << "row " << i;
+  }
+}
+
+// A far-off mesh GwnModel::build refused ("translate the mesh near the origin": a unit
+// tetrahedron at UTM-like coordinates, its box 4e-7 of its largest coordinate) is answered: w and
+// the signed distance to its faces, as about the origin.
+TEST_F(QueryCliTest, MeshThatWasRefusedAsFarOffIsAnswered) {
+  const std::string mesh = temp_path("utm_tet.obj"), points = temp_path("utm_tet_points.txt");
+  test::write_far_tetrahedron(mesh);
+  {
+    // Inside, 0.2 from the faces x = 0, y = 0 and z = 0; outside, 2 in front of the face x = 0.
+    std::ofstream p(points);
+    p << "512345.878 4123456.989 123.45\n512343.678 4123457.039 123.5\n";
+  }
+  const RunResult r = run_query(binary_, quote(mesh) + " --points " + quote(points) + " --fields w,sdf");
+  std::remove(mesh.c_str());
+  std::remove(points.c_str());
+  ASSERT_TRUE(r.exited);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = test::csv_rows(r.out);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"x", "y", "z", "w", "sdf", "sdf_piece"}));
+  ASSERT_EQ(rows[1].size(), 6u);
+  ASSERT_EQ(rows[2].size(), 6u);
+  // The points as given; w and the sdf as about the origin, to float's rounding there (6e-8).
+  EXPECT_EQ(rows[1][0] + " " + rows[1][1] + " " + rows[1][2], "512345.878 4123456.989 123.45");
+  EXPECT_EQ(rows[2][0] + " " + rows[2][1] + " " + rows[2][2], "512343.678 4123457.039 123.5");
+  EXPECT_NEAR(test::cell_double(rows[1][3]), 1.0, 1e-5);
+  EXPECT_NEAR(test::cell_double(rows[2][3]), 0.0, 1e-5);
+  EXPECT_NEAR(test::cell_double(rows[1][4]), -0.2, 1e-5);
+  EXPECT_NEAR(test::cell_double(rows[2][4]), 2.0, 1e-5);
+  EXPECT_EQ(rows[1][5], "sheet");
+  EXPECT_EQ(rows[2][5], "sheet");
 }
 
 }  // namespace

@@ -25,6 +25,68 @@ namespace point_io_detail {
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
+enum class Read { kOk, kOutOfRange, kNotANumber };
+
+// Tiny magnitudes underflow a float (or a double) but are fine as coordinates (0, as the mesh
+// readers read them); only overflow is an error. strtod, unlike from_chars, says which it was
+// beyond double's range too (1e-400 was refused as out of range while 1e-50 read as 0).
+inline Read underflow_or_overflow(std::string_view digits, double& value) {
+  const std::string text(digits);
+  char* end = nullptr;
+  const double wide = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() + text.size() && std::abs(wide) <= 1.0) {
+    value = wide;
+    return Read::kOk;
+  }
+  return Read::kOutOfRange;
+}
+
+// `digits` read straight into a float: how every number was read before positions were read in
+// double, and how a number exactly halfway between two floats is still read (rounded to double
+// first, it could round to the other one).
+inline Read read_float(std::string_view digits, float& value) {
+  const char* const last = digits.data() + digits.size();
+  const std::from_chars_result r = std::from_chars(digits.data(), last, value);
+  if (r.ec == std::errc::result_out_of_range) {
+    double wide = 0;
+    if (underflow_or_overflow(digits, wide) != Read::kOk) return Read::kOutOfRange;
+    value = float(wide);
+    return Read::kOk;
+  }
+  return r.ec == std::errc() && r.ptr == last ? Read::kOk : Read::kNotANumber;
+}
+
+// Whether `d` lies exactly halfway between two floats, where rounding it to float can differ
+// from rounding its decimal text to float.
+inline bool halfway_between_floats(double d) {
+  const float f = float(d);
+  if (double(f) == d) return false;
+  // Halfway between the largest float and the next power of 2 (rounded to even: overflow).
+  if (std::isinf(f)) return std::fabs(d) == 0x1.ffffffp127;
+  const float g = std::nextafter(f, double(f) < d ? HUGE_VALF : -HUGE_VALF);
+  return !std::isinf(g) && d - double(f) == double(g) - d;
+}
+
+// `digits` in double (`wide`: a world coordinate such as 4123456.789 keeps its digits) and in
+// float (`narrow`: exactly read_float's value, the one every column had before). A finite
+// number beyond float's range is out of range, as it was.
+inline Read read_number(std::string_view digits, double& wide, float& narrow) {
+  const char* const last = digits.data() + digits.size();
+  std::from_chars_result r = std::from_chars(digits.data(), last, wide);
+  if (r.ec == std::errc::result_out_of_range) {
+    if (underflow_or_overflow(digits, wide) != Read::kOk) return Read::kOutOfRange;
+    r.ec = std::errc();
+  }
+  if (r.ec != std::errc() || r.ptr != last) return Read::kNotANumber;
+  if (halfway_between_floats(wide)) return read_float(digits, narrow);
+  narrow = float(wide);
+  return std::isinf(narrow) && !std::isinf(wide) ? Read::kOutOfRange : Read::kOk;
+}
+
+// A position read in double, moved by -origin and rounded to float. With a zero origin exactly
+// the float read (bit for bit what was read before).
+inline float shifted(double wide, float narrow, double origin) { return origin == 0.0 ? narrow : float(wide - origin); }
+
 }  // namespace point_io_detail
 
 // A row is a few numbers and perhaps a comment: a longer line is not a points or rays file (or a
@@ -33,7 +95,9 @@ inline constexpr uint64_t kMaxRowLineBytes = uint64_t(1) << 20;
 
 // Parses `text` as rows of numbers; `source` names it in messages ("<source>:<line>: ...").
 // A row must hold one of `counts` numbers (`layout` describes them in errors); column c may be
-// +/-inf only when `infinite_ok(c)` says so, NaN never. `row(values, count, line)` consumes it.
+// +/-inf only when `infinite_ok(c)` says so, NaN never. `row(wide, values, count, line)` consumes
+// it: each number in double (for positions far from the origin, point_io_detail::shifted) and in
+// float.
 template <class InfiniteOk, class RowFn>
 inline Status parse_rows(std::string_view text, const std::string& source, std::initializer_list<int> counts,
                          const char* layout, InfiniteOk infinite_ok, RowFn row) {
@@ -53,6 +117,7 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
 
     // Built only on failure: one allocation per line would dominate the parse of large files.
     const auto where = [&] { return source + ":" + std::to_string(line_no) + ": "; };
+    double wide[kMaxColumns];
     float values[kMaxColumns];
     int count = 0;
     size_t i = 0;
@@ -69,30 +134,21 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
       // from_chars rejects a leading '+', which people do write.
       std::string_view digits = token;
       if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-' && digits[1] != '+') digits.remove_prefix(1);
-      float value = 0;
-      const char* const last = digits.data() + digits.size();
-      std::from_chars_result r = std::from_chars(digits.data(), last, value);
-      if (r.ec == std::errc::result_out_of_range) {
-        // Tiny magnitudes underflow a float but are fine as coordinates (0, as the mesh readers
-        // read them); only overflow is an error. strtod, unlike from_chars, says which it was
-        // beyond double's range too (1e-400 was refused as out of range while 1e-50 read as 0).
-        const std::string text(digits);
-        char* end = nullptr;
-        const double wide = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() + text.size() && std::abs(wide) <= 1.0) {
-          value = float(wide);
-          r.ec = std::errc();
-        } else {
+      double value = 0;
+      float narrow = 0;
+      switch (read_number(digits, value, narrow)) {
+        case Read::kOutOfRange:
           return {StatusCode::kParseError, where() + "number out of range: " + quoted_token(token)};
-        }
-      }
-      if (r.ec != std::errc() || r.ptr != last) {
-        return {StatusCode::kParseError, where() + "not a number: " + quoted_token(token)};
+        case Read::kNotANumber:
+          return {StatusCode::kParseError, where() + "not a number: " + quoted_token(token)};
+        case Read::kOk:
+          break;
       }
       if (std::isnan(value) || (std::isinf(value) && !infinite_ok(count))) {
         return {StatusCode::kParseError, where() + "non-finite value: " + quoted_token(token)};
       }
-      values[count++] = value;
+      wide[count] = value;
+      values[count++] = narrow;
     }
     if (count == 0) continue;
     bool allowed = false;
@@ -101,19 +157,24 @@ inline Status parse_rows(std::string_view text, const std::string& source, std::
       return {StatusCode::kParseError,
               where() + "expected " + layout + ", found " + std::to_string(count) + " numbers"};
     }
-    if (Status s = row(values, count, line_no); !s.ok()) return {s.code(), where() + s.message()};
+    if (Status s = row(wide, values, count, line_no); !s.ok()) return {s.code(), where() + s.message()};
   }
   return Status::Ok();
 }
 
-// Points: exactly three finite numbers per line.
-inline Status parse_points(std::string_view text, const std::string& source, std::vector<vec3>& points) {
+// Points: exactly three finite numbers per line, read in double and moved by -`origin` (the
+// MeshLoadReport::origin of a recentred mesh: the model's coordinates are the file's minus it)
+// before they are rounded to float. The coordinates served are those after the move: the ones
+// the library is asked about.
+inline Status parse_points(std::string_view text, const std::string& source, std::vector<vec3>& points,
+                           const dvec3& origin = dvec3(0.0)) {
   points.clear();
   return parse_rows(
       text, source, {3}, "3 numbers (x y z)", [](int) { return false; },
-      [&](const float* v, int, size_t) -> Status {
+      [&](const double* w, const float* v, int, size_t) -> Status {
+        using point_io_detail::shifted;
         // The library refuses these too, but names only the point's index: here the file and line.
-        const vec3 p(v[0], v[1], v[2]);
+        const vec3 p(shifted(w[0], v[0], origin.x), shifted(w[1], v[1], origin.y), shifted(w[2], v[2], origin.z));
         if (!query_point_served(p)) {
           char limit[32];
           std::snprintf(limit, sizeof limit, "%g", double(kMaxQueryCoordinate));
@@ -135,23 +196,27 @@ inline Status read_text(const std::string& path, std::string& text, std::string&
   return read_file(path, text, limits);
 }
 
-// Reads points from `path`, or from standard input when `path` is "-".
-inline Status read_points(const std::string& path, std::vector<vec3>& points) {
+// Reads points from `path`, or from standard input when `path` is "-" (parse_points).
+inline Status read_points(const std::string& path, std::vector<vec3>& points, const dvec3& origin = dvec3(0.0)) {
   std::string text, source;
   if (Status s = read_text(path, text, source); !s.ok()) return s;
-  return parse_points(text, source, points);
+  return parse_points(text, source, points, origin);
 }
 
-// One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf.
-inline Status read_rays(const std::string& path, std::vector<Ray>& rays) {
-  std::string text, source;
-  if (Status s = read_text(path, text, source); !s.ok()) return s;
+// One ray per line: "ox oy oz dx dy dz [tnear tfar]"; tfar may be inf. The ray's origin is read
+// as parse_points reads a point (moved by -`origin`); its direction, tnear and tfar are not moved.
+inline Status parse_rays(std::string_view text, const std::string& source, std::vector<Ray>& rays,
+                         const dvec3& origin = dvec3(0.0)) {
   rays.clear();
   return parse_rows(
       text, source, {6, 8}, "6 or 8 numbers (ox oy oz dx dy dz [tnear tfar])", [](int column) { return column == 7; },
-      [&](const float* v, int count, size_t) -> Status {
+      [&](const double* w, const float* v, int count, size_t) -> Status {
+        using point_io_detail::shifted;
         Ray r;
-        r.origin = vec3(v[0], v[1], v[2]);
+        r.origin = vec3(shifted(w[0], v[0], origin.x), shifted(w[1], v[1], origin.y), shifted(w[2], v[2], origin.z));
+        // Only a huge origin can move a float's worth of coordinate beyond float's range.
+        if (!std::isfinite(r.origin.x) || !std::isfinite(r.origin.y) || !std::isfinite(r.origin.z))
+          return {StatusCode::kParseError, "ray origin beyond float's range about the mesh's origin"};
         r.direction = vec3(v[3], v[4], v[5]);
         if (r.direction == vec3(0.0f)) return {StatusCode::kParseError, "ray direction is zero"};
         if (!(glm::length(dvec3(r.direction)) >= double(kMinDirectionLength)))
@@ -166,6 +231,13 @@ inline Status read_rays(const std::string& path, std::vector<Ray>& rays) {
         rays.push_back(r);
         return Status::Ok();
       });
+}
+
+// Reads rays from `path`, or from standard input when `path` is "-" (parse_rays).
+inline Status read_rays(const std::string& path, std::vector<Ray>& rays, const dvec3& origin = dvec3(0.0)) {
+  std::string text, source;
+  if (Status s = read_text(path, text, source); !s.ok()) return s;
+  return parse_rays(text, source, rays, origin);
 }
 
 }  // namespace gwnrt::examples

@@ -183,7 +183,11 @@ int main(int argc, char** argv) {
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
-  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(kProgram, s.message());
+  // A far-off scan is meshed about its own centre and written back where it was.
+  gwnrt::MeshLoadOptions load_options;
+  load_options.recentre = true;
+  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
+    return fail(kProgram, s.message());
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s%s; loaded and built in %.3f s\n", kProgram,
                  mesh_path.c_str(), model.mesh().triangles.size(), model.boundary().segment_count(),
@@ -222,7 +226,10 @@ int main(int argc, char** argv) {
   const double mesh_seconds = seconds_since(t0);
   if (!stats.message.empty()) std::fprintf(stderr, "%s: %s\n", kProgram, stats.message.c_str());
   const auto t_write = std::chrono::steady_clock::now();
-  if (Status w = gwnrt::write_surface_mesh(output_path, out); !w.ok()) return fail(kProgram, w.message());
+  gwnrt::MeshWriteOptions write_options;
+  write_options.origin = loaded.report.origin;
+  if (Status w = gwnrt::write_surface_mesh(output_path, out, write_options); !w.ok())
+    return fail(kProgram, w.message());
   if (chatty)
     std::fprintf(stderr,
                  "%s: %.3f s on the %s (+ %s%.3f s to write): %ux%ux%u cells of %g, %llu active "

@@ -38,6 +38,7 @@
 
 namespace {
 
+using gwnrt::dvec3;
 using gwnrt::PointResult;
 using gwnrt::vec3;
 using gwnrt::examples::CsvWriter;
@@ -47,12 +48,13 @@ using gwnrt::examples::seconds_since;
 constexpr const char* kProgram = "gwnrt-query";
 
 // An output of --fields: what evaluate_point must compute for it, its CSV columns and how to
-// write them. "all" is every field before the signed-distance ones, which need a level.
+// write them (positions about `origin`, MeshLoadReport::origin: in the input's coordinates). "all"
+// is every field before the signed-distance ones, which need a level.
 struct Field {
   const char* name;
   uint32_t request_bits;
   std::initializer_list<const char*> headers;
-  void (*write)(CsvWriter&, const PointResult&);
+  void (*write)(CsvWriter&, const PointResult&, const dvec3& origin);
 };
 
 const char* piece_name(gwnrt::DistancePiece piece) {
@@ -67,58 +69,58 @@ const char* piece_name(gwnrt::DistancePiece piece) {
 }
 
 const Field kFields[] = {
-    {"w", gwnrt::kFieldW, {"w"}, [](CsvWriter& c, const PointResult& r) { c.field(r.w); }},
+    {"w", gwnrt::kFieldW, {"w"}, [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.w); }},
     {"grad",
      gwnrt::kFieldGradient,
      {"gx", "gy", "gz"},
-     [](CsvWriter& c, const PointResult& r) {
+     [](CsvWriter& c, const PointResult& r, const dvec3&) {
        for (int a = 0; a < 3; ++a) c.field(r.gradient[a]);
      }},
     {"hess",
      gwnrt::kFieldHessian,
      {"hxx", "hxy", "hxz", "hyy", "hyz", "hzz"},
-     [](CsvWriter& c, const PointResult& r) {
+     [](CsvWriter& c, const PointResult& r, const dvec3&) {
        for (float h : {r.hessian.xx, r.hessian.xy, r.hessian.xz, r.hessian.yy, r.hessian.yz, r.hessian.zz}) c.field(h);
      }},
     {"udist",
      gwnrt::kFieldUnsignedDistance,
      {"udist"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.unsigned_distance); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.unsigned_distance); }},
     {"bdist",
      gwnrt::kFieldBoundaryDistance,
      {"bdist"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.boundary_distance); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.boundary_distance); }},
     {"sdf",
      gwnrt::kFieldSignedDistance,
      {"sdf", "sdf_piece"},
-     [](CsvWriter& c, const PointResult& r) {
+     [](CsvWriter& c, const PointResult& r, const dvec3&) {
        c.field(r.sdf.distance);
        c.field(piece_name(r.sdf.piece));
      }},
     {"sdf1",
      gwnrt::kFieldPseudoDistance,
      {"sdf1"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.first_order); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.sdf.first_order); }},
     {"sdf2",
      gwnrt::kFieldPseudoDistance,
      {"sdf2"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.second_order); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.sdf.second_order); }},
     {"sheet_dist",
      gwnrt::kFieldSheetDistance,
      {"sheet_dist"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.sdf.sheet_distance); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.sdf.sheet_distance); }},
     {"proj",
      gwnrt::kFieldProjection,
      {"proj_x", "proj_y", "proj_z", "proj_iters", "proj_converged"},
-     [](CsvWriter& c, const PointResult& r) {
-       for (int a = 0; a < 3; ++a) c.field(r.projection.point[a]);
+     [](CsvWriter& c, const PointResult& r, const dvec3& origin) {
+       for (int a = 0; a < 3; ++a) c.field(r.projection.point[a], origin[a]);
        c.field(unsigned(r.projection.iterations));
        c.field(unsigned(r.projection.converged));
      }},
     {"hbound",
      gwnrt::kFieldHarnackBound,
      {"hbound"},
-     [](CsvWriter& c, const PointResult& r) { c.field(r.harnack_bound); }},
+     [](CsvWriter& c, const PointResult& r, const dvec3&) { c.field(r.harnack_bound); }},
 };
 constexpr size_t kFieldsInAll = 5;  // w, grad, hess, udist, bdist
 
@@ -140,18 +142,19 @@ std::string valid_field_list() {
   return list + ", all (= w, grad, hess, udist, bdist)";
 }
 
-// Columns in the order of kFields, whatever the order asked for.
+// Columns in the order of kFields, whatever the order asked for. The points and the positions
+// among the fields are written in the input's coordinates (about `origin`).
 void write_csv(CsvWriter& csv, const std::vector<bool>& selected, const std::vector<vec3>& points,
-               const std::vector<PointResult>& results) {
+               const std::vector<PointResult>& results, const dvec3& origin) {
   for (const char* h : {"x", "y", "z"}) csv.field(h);
   for (size_t f = 0; f < std::size(kFields); ++f)
     if (selected[f])
       for (const char* h : kFields[f].headers) csv.field(h);
   csv.end_row();
   for (size_t i = 0; i < points.size(); ++i) {
-    for (int a = 0; a < 3; ++a) csv.field(points[i][a]);
+    for (int a = 0; a < 3; ++a) csv.field(points[i][a], origin[a]);
     for (size_t f = 0; f < std::size(kFields); ++f)
-      if (selected[f]) kFields[f].write(csv, results[i]);
+      if (selected[f]) kFields[f].write(csv, results[i], origin);
     csv.end_row();
   }
 }
@@ -271,7 +274,11 @@ int main(int argc, char** argv) {
   gwnrt::BuildOptions build_options;
   build_options.defer_parts = true;
   build_options.sheet_level = level;
-  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded, build_options); !s.ok())
+  // A far-off mesh (a georeferenced scan) is computed about its own centre: the points are moved
+  // by -origin as they are read, the positions written moved back.
+  gwnrt::MeshLoadOptions load_options;
+  load_options.recentre = true;
+  if (gwnrt::Status s = gwnrt::examples::load_model(mesh_path, model, loaded, build_options, load_options); !s.ok())
     return fail(kProgram, s.message());
   const auto t_parts = std::chrono::steady_clock::now();
   if (gwnrt::Status s = model.prepare(gwnrt::parts_read_by(request)); !s.ok())
@@ -322,7 +329,8 @@ int main(int argc, char** argv) {
   }
 
   std::vector<vec3> points;
-  if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points); !s.ok()) return fail(kProgram, s.message());
+  if (gwnrt::Status s = gwnrt::examples::read_points(points_path, points, report.origin); !s.ok())
+    return fail(kProgram, s.message());
 
   // Checked before allocating (issue 15): with overcommit a size beyond memory would not fail here
   // but kill the process later, while it fills the results.
@@ -361,7 +369,7 @@ int main(int argc, char** argv) {
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
   if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
   CsvWriter csv(out);
-  write_csv(csv, selected, points, results);
+  write_csv(csv, selected, points, results, report.origin);
   bool ok = csv.flush();
   ok = (std::fflush(out) == 0) && ok;
   if (!to_stdout) ok = (std::fclose(out) == 0) && ok;

@@ -55,7 +55,9 @@ const char* kind_name(gwnrt::HitKind kind) {
   }
 }
 
-void write_csv(CsvWriter& csv, const std::vector<RayHit>& hits) {
+// The hit positions in the input's coordinates (about `origin`, MeshLoadReport::origin); t and the
+// normals do not depend on where the mesh lies.
+void write_csv(CsvWriter& csv, const std::vector<RayHit>& hits, const gwnrt::dvec3& origin) {
   for (const char* h : {"hit", "t", "px", "py", "pz", "nx", "ny", "nz", "kind", "tri", "steps", "crossings", "capped"})
     csv.field(h);
   csv.end_row();
@@ -63,7 +65,7 @@ void write_csv(CsvWriter& csv, const std::vector<RayHit>& hits) {
   for (const RayHit& h : hits) {
     csv.field(h.hit ? 1u : 0u);
     csv.field(h.hit ? h.t : gwnrt::kInfinity);
-    for (int a = 0; a < 3; ++a) csv.field(h.hit ? h.position[a] : nan);
+    for (int a = 0; a < 3; ++a) csv.field(h.hit ? h.position[a] : nan, origin[a]);
     for (int a = 0; a < 3; ++a) csv.field(h.hit ? h.normal[a] : nan);
     csv.field(kind_name(h.kind));
     if (h.triangle == gwnrt::kEmptyLane) {
@@ -135,8 +137,13 @@ int main(int argc, char** argv) {
 
   const gwnrt::examples::ThreadLimit thread_limit(threads);
 
+  // Read and checked before the model is built (a mistyped line is not found after a long build),
+  // in the file's coordinates; read again about the mesh's origin if it is recentred (below).
   std::vector<Ray> rays;
-  if (Status s = gwnrt::examples::read_rays(rays_path, rays); !s.ok()) return fail(kProgram, s.message());
+  std::string rays_text, rays_source;
+  if (Status s = gwnrt::examples::read_text(rays_path, rays_text, rays_source); !s.ok())
+    return fail(kProgram, s.message());
+  if (Status s = gwnrt::examples::parse_rays(rays_text, rays_source, rays); !s.ok()) return fail(kProgram, s.message());
   // Checked before the model is built and the hits allocated: with overcommit a size beyond memory would kill the
   // process later.
   if (Status s = gwnrt::check_memory(
@@ -147,7 +154,19 @@ int main(int argc, char** argv) {
 
   gwnrt::GwnModel model;
   gwnrt::examples::ModelLoad loaded;
-  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded); !s.ok()) return fail(kProgram, s.message());
+  // A far-off mesh (a georeferenced scan) is traced about its own centre: the rays' origins are
+  // moved by -origin, the hit positions written moved back.
+  gwnrt::MeshLoadOptions load_options;
+  load_options.recentre = true;
+  if (Status s = gwnrt::examples::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
+    return fail(kProgram, s.message());
+  const gwnrt::dvec3 origin = loaded.report.origin;
+  if (origin != gwnrt::dvec3(0.0)) {
+    // From the text again: the origins' digits that float drops far from the mesh's origin.
+    if (Status s = gwnrt::examples::parse_rays(rays_text, rays_source, rays, origin); !s.ok())
+      return fail(kProgram, s.message());
+  }
+  std::string().swap(rays_text);
   gwnrt::examples::print_load_warnings(kProgram, mesh_path, loaded.report);
   gwnrt::examples::warn_if_level_out_of_reach(kProgram, model.view(), options);
   if (chatty)
@@ -198,7 +217,7 @@ int main(int argc, char** argv) {
   std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
   if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
   CsvWriter csv(out);
-  write_csv(csv, hits);
+  write_csv(csv, hits, origin);
   bool ok = csv.flush();
   ok = (std::fflush(out) == 0) && ok;
   if (!to_stdout) ok = (std::fclose(out) == 0) && ok;

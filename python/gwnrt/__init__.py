@@ -147,11 +147,20 @@ class Model:
         self._native = _gwnrt.Model(vertices, faces, classify_sheets=classify_sheets, level=level,
                                     sheet_method=sheet_method, threads=threads)
 
+    _origin = np.zeros(3)
+
     @classmethod
     def _from_native(cls, native) -> "Model":
         model = cls.__new__(cls)
         model._native = native
         return model
+
+    @property
+    def origin(self) -> np.ndarray:
+        """Where the model's coordinate 0 lies in its file's coordinates (float64): non-zero only
+        for a far-off mesh loaded with recentre=True. vertices and every position in and out are
+        relative to it."""
+        return self._origin.copy()
 
     # -- the mesh --------------------------------------------------------------------------------
     @property
@@ -310,21 +319,27 @@ def _per_ray(x, k, name):
 
 
 def load(path, *, classify_sheets: bool = True, level: float = 0.5, sheet_method: str = "auto",
-         threads: Optional[int] = None) -> Model:
+         threads: Optional[int] = None, recentre: bool = False) -> Model:
     """A Model from an OBJ or PLY file (what the file had that gwnrt does not read is
-    reported as a warning)."""
-    native, notes = _gwnrt.Model.load(os.fspath(path), classify_sheets=classify_sheets, level=level,
-                                      sheet_method=sheet_method, threads=threads)
+    reported as a warning). recentre: a mesh far from the origin for its size (a georeferenced
+    scan) is read in double and moved by -model.origin before float keeps it; subtract origin
+    from the points you ask about and add it to the positions you get (write_mesh's origin=)."""
+    native, notes, origin = _gwnrt.Model.load(os.fspath(path), classify_sheets=classify_sheets, level=level,
+                                              sheet_method=sheet_method, threads=threads, recentre=recentre)
     if notes:
         warnings.warn(f"{os.fspath(path)}: {notes}", stacklevel=2)
-    return Model._from_native(native)
+    model = Model._from_native(native)
+    model._origin = np.array(origin, dtype=np.float64)
+    return model
 
 
 def write_mesh(path, mesh, faces=None, *, normals=None, uvs=None, colors=None, source_triangles=None,
-               source_barycentrics=None, format: str = "auto", soup: bool = False) -> None:
+               source_barycentrics=None, format: str = "auto", soup: bool = False, origin=None) -> None:
     """Writes a mesh to binary PLY or OBJ (by the extension, or format='ply'/'obj'): a MeshResult
     (every array it has), or vertices and faces arrays with optional per-vertex normals, uvs,
-    colours and source triangles and barycentrics (PLY only keeps the last two)."""
+    colours and source triangles and barycentrics (PLY only keeps the last two). origin (three
+    numbers, e.g. a recentred model's Model.origin) is added to the positions in double, and they
+    are then written in double."""
     if faces is None:
         if isinstance(mesh, MeshResult):
             normals = mesh.normals if normals is None else normals
@@ -335,7 +350,7 @@ def write_mesh(path, mesh, faces=None, *, normals=None, uvs=None, colors=None, s
         mesh, faces = _mesh_arrays(mesh)
     _gwnrt.write_mesh(os.fspath(path), mesh, faces, normals=normals, uvs=uvs, colors=colors,
                       source_triangles=source_triangles, source_barycentrics=source_barycentrics, format=format,
-                      soup=soup)
+                      soup=soup, origin=(0.0, 0.0, 0.0) if origin is None else tuple(float(c) for c in origin))
 
 
 def mesh_topology(mesh, faces=None, *, weld: bool = False) -> dict:

@@ -1,5 +1,6 @@
 // Meshing S into numpy arrays (the SurfaceMesh's buffers handed over, not copied), writing a mesh
 // to PLY/OBJ and the topology report.
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -121,8 +122,10 @@ SurfaceMesh surface_mesh(const py::handle& vertices, const py::handle& faces, co
 
 void write_mesh(const std::string& path, const py::handle& vertices, const py::handle& faces, const py::handle& normals,
                 const py::handle& uvs, const py::handle& colors, const py::handle& source_triangles,
-                const py::handle& source_barycentrics, const std::string& format, bool soup) {
+                const py::handle& source_barycentrics, const std::string& format, bool soup,
+                const std::array<double, 3>& origin) {
   MeshWriteOptions options;
+  options.origin = dvec3(origin[0], origin[1], origin[2]);
   if (format == "auto")
     options.format = MeshFileFormat::kAuto;
   else if (format == "ply")
@@ -167,7 +170,7 @@ void bind_meshing(py::module_& m) {
   m.def("write_mesh", &write_mesh, py::arg("path"), py::arg("vertices"), py::arg("faces"),
         py::arg("normals") = py::none(), py::arg("uvs") = py::none(), py::arg("colors") = py::none(),
         py::arg("source_triangles") = py::none(), py::arg("source_barycentrics") = py::none(),
-        py::arg("format") = "auto", py::arg("soup") = false);
+        py::arg("format") = "auto", py::arg("soup") = false, py::arg("origin") = std::array<double, 3>{0.0, 0.0, 0.0});
   m.def("mesh_topology", &topology, py::arg("vertices"), py::arg("faces"), py::arg("weld") = false);
 }
 

@@ -194,18 +194,21 @@ void bind_model(py::module_& m) {
       .def_static(
           "load",
           [](const std::string& path, bool classify_sheets, float level, const std::string& sheet_method,
-             Threads threads) {
+             Threads threads, bool recentre) {
             const BuildOptions options = build_options(classify_sheets, level, sheet_method);
             Mesh mesh;
             MeshLoadReport report;
-            check(run_released(std::nullopt, [&] { return load_mesh(path, mesh, &report); }));
+            MeshLoadOptions load_options;
+            load_options.recentre = recentre;
+            check(run_released(std::nullopt, [&] { return load_mesh(path, mesh, &report, load_options); }));
             std::string notes = report.warnings;
             if (!report.attributes_dropped.empty())
               notes += (notes.empty() ? "" : "; ") + std::string("dropped: ") + report.attributes_dropped;
-            return py::make_tuple(build_model(std::move(mesh), options, threads), notes);
+            const std::array<double, 3> origin = {report.origin.x, report.origin.y, report.origin.z};
+            return py::make_tuple(build_model(std::move(mesh), options, threads), notes, origin);
           },
           py::arg("path"), py::kw_only(), py::arg("classify_sheets") = true, py::arg("level") = 0.5f,
-          py::arg("sheet_method") = "auto", py::arg("threads") = py::none())
+          py::arg("sheet_method") = "auto", py::arg("threads") = py::none(), py::arg("recentre") = false)
       .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model.mesh().positions.size(); })
       .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model.mesh().triangles.size(); })
       .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model.mesh().positions); })

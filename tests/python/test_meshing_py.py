@@ -144,7 +144,7 @@ def read_obj(path):
     return np.array(vertices), np.array(normals), np.array(faces, dtype=np.int64)
 
 
-PLY_TYPES = {"float": "<f4", "uint": "<u4", "int": "<i4", "uchar": "u1"}
+PLY_TYPES = {"float": "<f4", "double": "<f8", "uint": "<u4", "int": "<i4", "uchar": "u1"}
 
 
 def read_ply(path):
@@ -194,6 +194,47 @@ def test_write_mesh_obj_and_ply_read_back(bunny_surface, tmp_path):
         back = gwnrt.load(path, classify_sheets=False)
         assert (back.vertex_count, back.triangle_count) == (len(mesh.vertices), len(mesh.faces))
         np.testing.assert_array_equal(back.vertices, mesh.vertices)
+
+
+def test_a_far_off_scan_is_loaded_recentred_and_written_back_where_it_lies(bunny, tmp_path):
+    # The bunny at UTM coordinates (metres), written with every digit of the double sum.
+    offset = np.array([512345.678, 4123456.789, 123.25])
+    world = bunny.vertices.astype(np.float64) + offset
+    path = tmp_path / "utm_bunny.obj"
+    with open(path, "w") as fh:
+        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in world)
+        fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in bunny.faces)
+    with pytest.raises(ValueError, match="translate the mesh near the origin"):
+        gwnrt.load(path)
+    assert (bunny.origin == 0).all() and (gwnrt.Model(bunny.vertices, bunny.faces).origin == 0).all()
+    far = gwnrt.load(path, recentre=True)
+    assert (far.origin != 0).all()
+    # float keeps the shape to its resolution about the origin (steps below 1e-6), not at 4e6 (0.25).
+    np.testing.assert_allclose(far.vertices.astype(np.float64) + far.origin, world, rtol=0, atol=1e-6)
+
+    # w at the same world points: the two models differ by float rounding (C++ measured 1.8e-7).
+    rng = np.random.default_rng(3)
+    lo, hi = bunny.bounds
+    points = rng.uniform(lo - 1, hi + 1, (500, 3)).astype(np.float32)
+    far_points = (points.astype(np.float64) + offset - far.origin).astype(np.float32)
+    keep = bunny.unsigned_distance(points).distance >= 1e-2
+    assert keep.sum() > 450
+    np.testing.assert_allclose(far.winding_number(far_points, method="crossing")[keep],
+                               bunny.winding_number(points, method="crossing")[keep], rtol=0, atol=1e-5)
+
+    # The mesh of S written with the origin: doubles in PLY, at the near mesh's place + offset
+    # (within 2e-3 cells, the tolerance of rounding differences, as in the C++ test).
+    near_mesh, far_mesh = bunny.extract_surface(32), far.extract_surface(32)
+    ply = tmp_path / "utm_surface.ply"
+    gwnrt.write_mesh(ply, far_mesh, origin=far.origin)
+    verts, faces = read_ply(ply)
+    assert verts.dtype["x"] == np.float64
+    xyz = np.column_stack([verts["x"], verts["y"], verts["z"]])
+    assert xyz.shape == near_mesh.vertices.shape
+    np.testing.assert_allclose(xyz, near_mesh.vertices.astype(np.float64) + offset, rtol=0,
+                               atol=2e-3 * near_mesh.stats["cell_size"])
+    with pytest.raises(ValueError, match="origin"):
+        gwnrt.write_mesh(tmp_path / "bad.ply", far_mesh, origin=(0, float("nan"), 0))
 
 
 def test_write_mesh_keeps_the_source_attributes_in_ply(bunny, tmp_path):

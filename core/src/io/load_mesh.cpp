@@ -1,5 +1,9 @@
 // load_mesh (gwnrt/io/mesh_io.h): the reader chosen by the extension, then validate_mesh.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <limits>
+#include <vector>
 
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/read_file.h"
@@ -17,7 +21,30 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* report) {
+// MeshLoadOptions::recentre: the origin for `world` (the positions in double, one per vertex), or
+// zero when the mesh lies near enough the origin for its size.
+dvec3 recentred_origin(const std::vector<dvec3>& world, const std::vector<uvec3>& triangles) {
+  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const uvec3& t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      lo = glm::min(lo, world[t[k]]);
+      hi = glm::max(hi, world[t[k]]);
+    }
+  const dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double largest = std::max({far.x, far.y, far.z});
+  const double diagonal = glm::length(hi - lo);
+  if (!(largest > kRecentreCoordinatePerDiagonal * diagonal)) return dvec3(0.0);
+  const dvec3 centre = 0.5 * lo + 0.5 * hi;  // halves first: lo + hi may overflow
+  if (diagonal == 0) return centre;          // one point: every triangle has zero area anyway
+  const double step = std::exp2(std::floor(std::log2(diagonal)));
+  return glm::round(centre / step) * step;
+}
+
+Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* report,
+                           const MeshLoadOptions& options) {
+  if (options.recentre && !report)
+    return {StatusCode::kInvalidArgument,
+            cat(path, ": MeshLoadOptions::recentre needs a MeshLoadReport to return the origin in")};
   const std::string ext = lower_extension(path);
   const bool is_obj = ext == ".obj";
   if (!is_obj && ext != ".ply") {
@@ -35,9 +62,19 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
 
   Mesh m;
   MeshLoadReport rep;
-  Status s = is_obj ? io::read_obj(path, content, m, rep) : io::read_ply(path, content, m, rep);
+  std::vector<dvec3> world;
+  std::vector<dvec3>* const wide = options.recentre ? &world : nullptr;
+  Status s = is_obj ? io::read_obj(path, content, m, rep, wide) : io::read_ply(path, content, m, rep, wide);
   if (!s.ok()) return s;
   if (s = validate_mesh(m, path); !s.ok()) return s;
+  if (options.recentre) {
+    rep.origin = recentred_origin(world, m.triangles);
+    if (rep.origin != dvec3(0.0)) {
+      for (size_t i = 0; i < world.size(); ++i) m.positions[i] = vec3(world[i] - rep.origin);
+      // An unused vertex far from the rest may now round to infinity.
+      if (s = validate_mesh(m, path); !s.ok()) return s;
+    }
+  }
 
   rep.vertex_count = m.positions.size();
   rep.triangle_count = m.triangles.size();
@@ -53,8 +90,8 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
 
 }  // namespace
 
-Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report) {
-  return guard_status(path.c_str(), [&] { return load_mesh_unguarded(path, mesh, report); });
+Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report, const MeshLoadOptions& options) {
+  return guard_status(path.c_str(), [&] { return load_mesh_unguarded(path, mesh, report, options); });
 }
 
 }  // namespace gwnrt

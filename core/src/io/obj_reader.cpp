@@ -73,7 +73,7 @@ struct ObjIndex {
 
 }  // namespace
 
-Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadReport& rep) {
+Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadReport& rep, std::vector<dvec3>* world) {
   std::vector<vec3>& pos = mesh.positions;
   std::vector<uvec3>& tris = mesh.triangles;
   std::vector<glm::vec2> uvs;
@@ -107,6 +107,7 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
     if (!tk.next(kw)) continue;
     if (kw == "v") {
       float c[6] = {0, 0, 0, 0, 0, 0};
+      dvec3 wide(0.0);
       int n = 0;
       string_view tok;
       // x y z, then w or (the common extension) r g b; other counts' extra numbers are ignored
@@ -115,6 +116,8 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
         float v;
         if (!parse_real(tok, v))
           return {StatusCode::kParseError, at("malformed number ", quoted_token(tok), " in vertex")};
+        // Parsed again rather than widened: the float is what a plain load reads, bit for bit.
+        if (world && n < 3) (void)parse_real(tok, wide[n]);
         if (n < 6) c[n] = v;
         ++n;
       }
@@ -123,6 +126,7 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
       }
       if (pos.size() == kMaxVertices) return {StatusCode::kInvalidMesh, at("too many vertices (more than 2^32)")};
       pos.emplace_back(c[0], c[1], c[2]);
+      if (world) world->push_back(wide);
       if (!is_finite(c[0]) || !is_finite(c[1]) || !is_finite(c[2])) {
         return {StatusCode::kInvalidMesh,
                 at("vertex ", pos.size(), " has a non-finite coordinate (", c[0], ", ", c[1], ", ", c[2], ")")};

@@ -417,7 +417,8 @@ struct AsciiSource {
 };
 
 template <class Src>
-Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh& mesh, MeshLoadReport& rep) {
+Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh& mesh, MeshLoadReport& rep,
+                     std::vector<dvec3>* world) {
   const uint64_t nverts = h.elems[static_cast<size_t>(h.vertex)].count;
   std::vector<uint32_t> corners, uv_corners;
   std::vector<float> texcoord;  // one face's texcoord list
@@ -443,12 +444,14 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
     }
     if (is_vertex) {
       mesh.positions.resize(el.count);
+      if (world) world->resize(el.count);
       if (h.vertex_uvs) vertex_uvs.resize(el.count);
       if (h.vertex_colors) colors.resize(el.count);
     }
 
     for (uint64_t i = 0; i < el.count; ++i) {
       float value[kRoleCount] = {0, 0, 0, 0, 0, 0, 0, 0, 1};
+      dvec3 wide(0.0);
       texcoord.clear();
       bool face_has_texcoord = false;
       for (size_t j = 0; j < el.props.size(); ++j) {
@@ -460,6 +463,7 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
             r = src.read_real(pr.type, v);
             // Integer colour channels span their type's range (uchar: 0-255).
             if (pr.role >= kRed && info(pr.type).is_int) v = std::max(v, 0.0) / double(info(pr.type).hi);
+            if (pr.role <= kZ) wide[pr.role] = v;
             value[pr.role] = static_cast<float>(v);  // IEC 559 narrowing: rounds, overflows to infinity
           } else {
             r = src.skip(pr.type, 1);
@@ -519,6 +523,7 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
       }
       if (is_vertex) {
         mesh.positions[i] = vec3(value[kX], value[kY], value[kZ]);
+        if (world) (*world)[i] = wide;
         if (h.vertex_uvs) vertex_uvs[i] = {value[kU], value[kV]};
         if (h.vertex_colors) colors[i] = {value[kRed], value[kGreen], value[kBlue], value[kAlpha]};
       }
@@ -574,7 +579,7 @@ size_t ply_text_end(string_view head) {
   }
 }
 
-Status read_ply(const std::string& path, string_view data, Mesh& mesh, MeshLoadReport& rep) {
+Status read_ply(const std::string& path, string_view data, Mesh& mesh, MeshLoadReport& rep, std::vector<dvec3>* world) {
   PlyHeader h;
   if (Status s = parse_ply_header(path, data, h); !s.ok()) return s;
   const string_view body = data.substr(h.data_offset);
@@ -584,19 +589,19 @@ Status read_ply(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
   switch (h.format) {
     case PlyFormat::kAscii: {
       AsciiSource src{body.data(), body.data() + body.size(), h.end_header_line + 1, h.end_header_line, {}, {}};
-      s = read_ply_body(path, src, h, mesh, rep);
+      s = read_ply_body(path, src, h, mesh, rep, world);
       rep.format = "ply-ascii";
       break;
     }
     case PlyFormat::kBinaryLe: {
       BinarySource<!kLittleHost> src{ub, ub + body.size(), {}};
-      s = read_ply_body(path, src, h, mesh, rep);
+      s = read_ply_body(path, src, h, mesh, rep, world);
       rep.format = "ply-binary-le";
       break;
     }
     case PlyFormat::kBinaryBe: {
       BinarySource<kLittleHost> src{ub, ub + body.size(), {}};
-      s = read_ply_body(path, src, h, mesh, rep);
+      s = read_ply_body(path, src, h, mesh, rep, world);
       rep.format = "ply-binary-be";
       break;
     }

@@ -12,6 +12,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/mesh_io.h"
@@ -20,9 +21,12 @@
 namespace gwnrt::io {
 
 // Parse `data` (the contents of `path`) into `mesh`; messages name `path`. Validation of the
-// result (validate_mesh) is load_mesh's.
-Status read_obj(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
-Status read_ply(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report);
+// result (validate_mesh) is load_mesh's. When `world` is given it receives every vertex's
+// coordinates in double as well (MeshLoadOptions::recentre), one per mesh.positions entry.
+Status read_obj(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report,
+                std::vector<dvec3>* world);
+Status read_ply(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report,
+                std::vector<dvec3>* world);
 
 // ReadLimits::text_end for a PLY file: where its header ends when the body is binary (kAllText for
 // an ASCII body or a file that is not a PLY; kTextNotEnded before the end_header line).

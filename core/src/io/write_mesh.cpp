@@ -30,7 +30,8 @@ std::string errno_text(int err) {
 class OutFile {
  public:
   // The longest record one room() call may hold: an OBJ face line with three v/vt/vn corners of
-  // 10-digit indices, or a vertex line of six 15-character floats, with margin.
+  // 10-digit indices, or a vertex line of three 24-character doubles and three 15-character floats,
+  // with margin.
   static constexpr size_t kMaxRecord = 256;
 
   explicit OutFile(std::string path) : path_(std::move(path)) {}
@@ -212,6 +213,12 @@ inline char* put_u32(char* p, uint32_t v) {
 
 inline char* put_f32(char* p, float v) { return put_u32(p, std::bit_cast<uint32_t>(v)); }
 
+inline char* put_f64(char* p, double v) {
+  const uint64_t bits = std::bit_cast<uint64_t>(v);
+  p = put_u32(p, static_cast<uint32_t>(bits));
+  return put_u32(p, static_cast<uint32_t>(bits >> 32));
+}
+
 template <glm::length_t N>
 inline char* put_f32(char* p, const glm::vec<N, float>& v) {
   for (int k = 0; k < N; ++k) p = put_f32(p, v[k]);
@@ -220,15 +227,23 @@ inline char* put_f32(char* p, const glm::vec<N, float>& v) {
 
 inline char to_u8(float c) { return static_cast<char>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f)); }
 
-void write_ply(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
+// A position as written: in the input's coordinates (MeshWriteOptions::origin).
+inline dvec3 world_position(const SurfaceMesh& m, const dvec3& origin, size_t i) {
+  return origin + dvec3(m.positions[i]);
+}
+
+void write_ply(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts, const dvec3& origin) {
+  const bool wide = origin != dvec3(0.0);
   const bool has_n = !m.normals.empty();
   const bool has_c = !m.colors.empty();
   const bool has_uv = !m.uvs.empty();
   const bool has_st = !m.source_triangles.empty();
   const bool has_sb = !m.source_barycentrics.empty();
 
-  std::string h = cat("ply\nformat binary_little_endian 1.0\ncomment written by gwnrt\nelement vertex ", nverts,
-                      "\nproperty float x\nproperty float y\nproperty float z\n");
+  const char* const xyz = wide ? "property double x\nproperty double y\nproperty double z\n"
+                               : "property float x\nproperty float y\nproperty float z\n";
+  std::string h =
+      cat("ply\nformat binary_little_endian 1.0\ncomment written by gwnrt\nelement vertex ", nverts, "\n", xyz);
   if (has_n) h += "property float nx\nproperty float ny\nproperty float nz\n";
   if (has_c) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
   // `u v`: the names the project's PLY conventions and most readers (Assimp, Blender) accept.
@@ -240,7 +255,12 @@ void write_ply(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
 
   for_each_output_vertex(m, soup, [&](size_t i) {
     char* p = out.room();
-    p = put_f32(p, m.positions[i]);
+    if (wide) {
+      const dvec3 x = world_position(m, origin, i);
+      for (int k = 0; k < 3; ++k) p = put_f64(p, x[k]);
+    } else {
+      p = put_f32(p, m.positions[i]);
+    }
     if (has_n) p = put_f32(p, m.normals[i]);
     if (has_c) {
       for (int k = 0; k < 4; ++k) *p++ = to_u8(m.colors[i][k]);
@@ -278,7 +298,8 @@ inline char* put_floats(char* p, const glm::vec<N, float>& v) {
   return p;
 }
 
-void write_obj(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
+void write_obj(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts, const dvec3& origin) {
+  const bool wide = origin != dvec3(0.0);
   const bool has_n = !m.normals.empty();
   const bool has_c = !m.colors.empty();
   const bool has_uv = !m.uvs.empty();
@@ -287,7 +308,15 @@ void write_obj(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts) {
   for_each_output_vertex(m, soup, [&](size_t i) {
     char* p = out.room();
     *p++ = 'v';
-    p = put_floats(p, m.positions[i]);
+    if (wide) {
+      const dvec3 x = world_position(m, origin, i);
+      for (int k = 0; k < 3; ++k) {
+        *p++ = ' ';
+        p = std::to_chars(p, p + 32, x[k]).ptr;  // the shortest text that reads back to the same double
+      }
+    } else {
+      p = put_floats(p, m.positions[i]);
+    }
     if (has_c) p = put_floats(p, glm::clamp(glm::vec3(m.colors[i]), 0.0f, 1.0f));
     *p++ = '\n';
     out.commit(p);
@@ -349,6 +378,10 @@ Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const M
     }
   }
   if (Status s = check_mesh(path, mesh); !s.ok()) return s;
+  const dvec3& origin = options.origin;
+  if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z))
+    return {StatusCode::kInvalidArgument, cat(path, ": the origin added to the positions is not finite (", origin.x,
+                                              ", ", origin.y, ", ", origin.z, ")")};
 
   // PLY indices are declared int; OBJ readers (ours included) index with 32 bits.
   const bool ply = format == MeshFileFormat::kPly;
@@ -362,9 +395,9 @@ Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const M
   OutFile out(path);
   if (Status s = out.open(); !s.ok()) return s;
   if (ply) {
-    write_ply(out, mesh, options.soup, nverts);
+    write_ply(out, mesh, options.soup, nverts, origin);
   } else {
-    write_obj(out, mesh, options.soup, nverts);
+    write_obj(out, mesh, options.soup, nverts, origin);
   }
   return out.close();
 }

@@ -22,6 +22,27 @@ struct MeshLoadReport {
   std::string attributes_dropped;
   // Empty, or what was skipped that the user may not expect (OBJ lines with unknown statements).
   std::string warnings;
+  // Where the mesh's coordinate 0 lies in the file's coordinates: Mesh::positions are the file's
+  // minus this. Zero unless MeshLoadOptions::recentre moved the mesh.
+  dvec3 origin{0.0};
+};
+
+// A mesh is recentred (MeshLoadOptions::recentre) when its largest coordinate exceeds this many
+// times its box's diagonal: float then keeps at least 4 bits fewer of its shape than it would
+// about the origin. Meshes about the origin, the usual case, are read exactly as without recentring.
+inline constexpr double kRecentreCoordinatePerDiagonal = 16;
+
+struct MeshLoadOptions {
+  // gwnrt computes in float, whose step at a coordinate c is about 6e-8 c: a georeferenced scan
+  // (UTM coordinates of 1e5 to 1e7 m, for a site metres to kilometres across) keeps few bits of
+  // its shape in float, or is refused by GwnModel::build. With `recentre`, coordinates are also
+  // read in double and a mesh far from the origin for its size (kRecentreCoordinatePerDiagonal)
+  // is moved by -MeshLoadReport::origin before it is rounded to float. origin is the centre of
+  // the box of the vertices the triangles use, rounded to a multiple of the largest power of 2
+  // not above the box's diagonal (so it prints short and adds back exactly). The caller then
+  // subtracts origin from the points and rays it asks about, in double, and adds it back to the
+  // positions it writes out (MeshWriteOptions::origin). Needs a report to return origin in.
+  bool recentre = false;
 };
 
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
@@ -31,6 +52,7 @@ struct MeshLoadReport {
 // and the line or element, on malformed content, non-finite coordinates, out-of-range indices and meshes without
 // triangles; and, as it reads, on a text line longer than kMaxMeshLineBytes (the header of a binary PLY included) or
 // more bytes than the memory available (gwnrt/io/read_file.h): /dev/zero stops there.
-Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report = nullptr);
+Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report = nullptr,
+                 const MeshLoadOptions& options = {});
 
 }  // namespace gwnrt

@@ -6,7 +6,8 @@
 // extension) colours, with the shortest decimal text that reads back to the same float.
 //
 // PLY layout (binary_little_endian 1.0, "comment written by gwnrt"): element vertex with
-//   float x y z; float nx ny nz (normals); uchar red green blue alpha (colours, round(clamp(c, 0, 1)
+//   float x y z (double with an origin, MeshWriteOptions::origin); float nx ny nz (normals); uchar red green blue alpha
+//   (colours, round(clamp(c, 0, 1)
 //   * 255)); float u v (uvs); uint source_triangle (source_triangles); float source_u source_v
 //   (source_barycentrics), each group only when its array is non-empty; element face with
 //   `property list uchar int vertex_indices`.
@@ -33,13 +34,19 @@ struct MeshWriteOptions {
   // Every triangle gets three vertices of its own (attributes duplicated): for tools that want
   // flat, unshared corners.
   bool soup = false;
+  // Added to every position as it is written, in double: the MeshLoadReport::origin of a
+  // recentred input (MeshLoadOptions::recentre), so that the output lies where the input did.
+  // When it is not zero the positions are written in double (PLY `double x y z`; OBJ the
+  // shortest text that reads back to the same double), since float would round them again.
+  dvec3 origin{0.0};
 };
 
 // Writes `mesh` to `path` (replacing it). The mesh is checked before the file is opened, so an
 // invalid mesh leaves an existing file untouched: each per-vertex array must be empty or as
 // long as positions, every triangle index in range, and every float attribute finite (a NaN
 // written out is unreadable to most tools). Failures name the file and the triangle, vertex or
-// array; a write that fails part-way removes the partial file. Nothing throws.
+// array; a write that fails part-way removes the partial file. A non-finite origin is refused.
+// Nothing throws.
 [[nodiscard]] Status write_surface_mesh(const std::string& path, const SurfaceMesh& mesh,
                                         const MeshWriteOptions& options = {});
 
