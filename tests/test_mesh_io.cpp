@@ -270,6 +270,17 @@ TEST_F(TempFiles, RecentreKeepsAFarMeshsShapeInEveryEncoding) {
     t.xyz = "double";
     files.emplace_back(std::string("small_") + format + ".ply", small_ply(format, world, t));
   }
+  // Float properties in ASCII whose text has the digits a float would lose (as programs that
+  // declare float but print doubles write them; binary float cannot hold them).
+  PlyTypes as_double;
+  as_double.xyz = "double";
+  std::string float_declared = small_ply("ascii", world, as_double);
+  for (const char* axis : {"x", "y", "z"}) {
+    const std::string declared = std::string("property double ") + axis + "\n";
+    float_declared.replace(float_declared.find(declared), declared.size(),
+                           std::string("property float ") + axis + "\n");
+  }
+  files.emplace_back("small_ascii_float.ply", float_declared);
   for (const auto& [name, text] : files) {
     SCOPED_TRACE(name);
     Mesh m;
@@ -344,6 +355,19 @@ TEST_F(TempFiles, RecentreThresholdIsSixteenDiagonals) {
     ASSERT_TRUE(load_recentred(write("t.obj", obj_text(small_at({offset, 0, 0}), ref.faces)), m, r).ok());
     EXPECT_EQ(r.origin != dvec3(0.0), factor > kRecentreCoordinatePerDiagonal) << factor;
   }
+  // Near for its size (3.5 diagonals) but beyond the coordinates a model serves: moved, it is
+  // served (a plain load is refused by the build).
+  const std::string big = write("big.obj",
+                                "v 1e8 0 0\nv 1.2e8 0 0\nv 1e8 2e7 0\nv 1e8 0 2e7\n"
+                                "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  Mesh m, plain;
+  MeshLoadReport r;
+  ASSERT_TRUE(load_recentred(big, m, r).ok());
+  EXPECT_NE(r.origin, dvec3(0.0));
+  GwnModel model;
+  EXPECT_TRUE(GwnModel::build(std::move(m), model).ok());
+  ASSERT_TRUE(load_mesh(big, plain).ok());
+  EXPECT_FALSE(GwnModel::build(std::move(plain), model).ok());
 }
 
 TEST_F(TempFiles, RecentreNeedsAReportAndKeepsTheChecks) {
@@ -365,6 +389,15 @@ TEST_F(TempFiles, RecentreNeedsAReportAndKeepsTheChecks) {
   std::string text = obj_text(small_at(kUtmOffset), Small().faces) + "v 3e38 0 0\n";
   ASSERT_TRUE(load_mesh(write("unused.obj", text), m, &r, o).ok());
   EXPECT_LT(std::fabs(r.origin.x - kUtmOffset.x), 8.0);
+  // Moved by a triangle at -1e38, an unused vertex at 3.4e38 leaves float's range: said so, with
+  // the file's coordinates, not as a non-finite coordinate the file does not hold.
+  const Status beyond =
+      load_mesh(write("beyond.obj", "v -1e38 0 0\nv -1e38 1e31 0\nv -1e38 0 1e31\nv 3.4e38 0 0\nf 1 2 3\n"), m, &r, o);
+  EXPECT_EQ(beyond.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(
+      beyond.message().find("beyond.obj: vertex 3 (counting from 0), at (3.4e+38, 0, 0), is beyond float's range"),
+      std::string::npos)
+      << beyond.message();
 }
 
 // Stand-in for a georeferenced scan: bunny_holes moved to UTM coordinates. A plain load is refused

@@ -735,5 +735,21 @@ TEST_F(QueryCliTest, MeshThatWasRefusedAsFarOffIsAnswered) {
   EXPECT_EQ(rows[2][5], "sheet");
 }
 
+// A recentred mesh the build still refuses (its three vertices coincide, 5e6 out): the build's
+// message names model coordinates, so the origin they are relative to is said with it.
+TEST_F(QueryCliTest, RefusalOfARecentredMeshSaysTheOrigin) {
+  const std::string mesh = temp_path("utm_point.obj"), points = temp_path("utm_point_points.txt");
+  std::ofstream(mesh) << "v 5000000.5 1 1\nv 5000000.5 1 1\nv 5000000.5 1 1\nf 1 2 3\n";
+  std::ofstream(points) << "0 0 0\n";
+  const RunResult r = run_query(binary_, quote(mesh) + " --points " + quote(points));
+  std::remove(mesh.c_str());
+  std::remove(points.c_str());
+  ASSERT_TRUE(r.exited);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find(mesh + ": "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(coordinates relative to (5000000.5, 1, 1), the mesh being recentred)"), std::string::npos)
+      << r.err;
+}
+
 }  // namespace
 }  // namespace gwnrt

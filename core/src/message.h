@@ -1,4 +1,4 @@
-// Building error messages inside core: cat() joins strings, numbers and floats (shortest
+// Building error messages inside core: cat() joins strings, integers, floats and doubles (shortest
 // round-trip form) without iostreams (tokens from files: quoted_token, gwnrt/io/read_file.h).
 #pragma once
 
@@ -20,6 +20,11 @@ inline void append(std::string& s, T v) {
 
 inline void append(std::string& s, float v) {
   char buf[32];
+  s.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+inline void append(std::string& s, double v) {
+  char buf[40];
   s.append(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 

@@ -33,25 +33,32 @@ inline Status load_model(const std::string& path, GwnModel& model, ModelLoad& in
   if (Status s = load_mesh(path, mesh, &info.report, load_options); !s.ok()) return s;
   info.load_seconds = seconds_since(t_load);
   const auto t_build = std::chrono::steady_clock::now();
-  if (Status s = GwnModel::build(std::move(mesh), model, options); !s.ok())
-    return {s.code(), path + ": " + s.message()};
+  if (Status s = GwnModel::build(std::move(mesh), model, options); !s.ok()) {
+    // The build names coordinates as the model holds them: say how they relate to the file's.
+    char moved[160] = "";
+    if (info.report.origin != dvec3(0.0))
+      std::snprintf(moved, sizeof moved, " (coordinates relative to (%.17g, %.17g, %.17g), the mesh being recentred)",
+                    info.report.origin.x, info.report.origin.y, info.report.origin.z);
+    return {s.code(), path + ": " + s.message() + moved};
+  }
   info.build_seconds = seconds_since(t_build);
   return Status::Ok();
 }
 
 // What loading skipped that the user may not expect (MeshLoadReport::warnings: OBJ lines with an
 // unknown statement), as "program: path: warning: ..." on stderr; said whether or not stderr is a
-// terminal, because a skipped line may be a mistyped vertex.
-inline void print_load_warnings(const char* program, const std::string& path, const MeshLoadReport& report) {
+// terminal, because a skipped line may be a mistyped vertex. `positions_out`: whether the
+// program reads and writes positions in the file's coordinates (not the renderer's images).
+inline void print_load_warnings(const char* program, const std::string& path, const MeshLoadReport& report,
+                                bool positions_out = true) {
   if (!report.warnings.empty())
     std::fprintf(stderr, "%s: %s: warning: %s\n", program, path.c_str(), report.warnings.c_str());
   // Not a warning: what was done to keep a far-off mesh's precision, said because timings and
   // the library's own messages (which name model coordinates) then differ from the file's.
   if (report.origin != dvec3(0.0))
-    std::fprintf(stderr,
-                 "%s: %s: far from the origin for its size: computed relative to (%.17g, %.17g, %.17g); positions "
-                 "are read and written in double\n",
-                 program, path.c_str(), report.origin.x, report.origin.y, report.origin.z);
+    std::fprintf(stderr, "%s: %s: far from the origin for its size: computed relative to (%.17g, %.17g, %.17g)%s\n",
+                 program, path.c_str(), report.origin.x, report.origin.y, report.origin.z,
+                 positions_out ? "; positions are read and written in double" : "");
 }
 
 }  // namespace gwnrt::examples

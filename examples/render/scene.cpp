@@ -280,11 +280,11 @@ Mesh plane_mesh(float size) {
 
 // A transform the renderer can carry (see kMaxTransformScale and kMaxTransformCondition above):
 // finite, affine, its scale factors within 1e±12 and not nearly singular.
-void check_transform(const glm::mat4& t, const std::string& where) {
-  const glm::dmat4 m(t);
+void check_transform(const glm::dmat4& m, const std::string& where) {
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(m[c][r])) fail(where, "the transform overflows float (an entry is not finite)");
+      if (!(std::fabs(m[c][r]) <= double(FLT_MAX)))
+        fail(where, "the transform overflows float (an entry is beyond float's range)");
   if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0)
     fail(where, "not an affine transform: the last row must be 0 0 0 1 (a projective matrix cannot place geometry)");
   const glm::dmat3 a(m);
@@ -308,37 +308,48 @@ void check_transform(const glm::mat4& t, const std::string& where) {
   }
 }
 
-glm::mat4 transform(const json& j, const std::string& where) {
+// A scene file's transform, computed in double: a recentred mesh's origin is composed with it
+// (placed) before float keeps the result for Embree; check_transform says whether float can.
+glm::dmat4 transform(const json& j, const std::string& where) {
   object(j, where, "a transform");
-  glm::mat4 out(1.0f);
+  glm::dmat4 out(1.0);
   if (const json* m = member(j, "matrix")) {
     if (j.size() > 1) fail(where, "give \"matrix\" alone, or \"translate\", \"rotate\" and \"scale\"");
     const std::string mw = at(where, "matrix");
     if (!m->is_array() || m->size() != 16) fail(mw, "expected 16 numbers (row-major)");
     for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) out[c][r] = number((*m)[size_t(4 * r + c)], at(mw, size_t(4 * r + c)));
+      for (int c = 0; c < 4; ++c) out[c][r] = real((*m)[size_t(4 * r + c)], at(mw, size_t(4 * r + c)));
   } else {
     check_keys(j, where, {"translate", "rotate", "scale", "matrix"});
-    if (const json* t = member(j, "translate")) out = glm::translate(out, vec3(vector3(*t, at(where, "translate"))));
+    if (const json* t = member(j, "translate")) out = glm::translate(out, vector3(*t, at(where, "translate")));
     if (const json* r = member(j, "rotate")) {
       const std::string rw = at(where, "rotate");
       if (!r->is_array() || r->size() != 4) fail(rw, "expected [axis_x, axis_y, axis_z, degrees]");
       const dvec3 axis(real((*r)[0], at(rw, 0)), real((*r)[1], at(rw, 1)), real((*r)[2], at(rw, 2)));
       const double length = glm::length(axis);
       if (!(length > 0.0)) fail(rw, "the axis must not be zero");
-      // The angle reduced in double first: float's radians of a huge angle would lose the turn.
+      // The angle reduced first: the radians of a huge angle would lose the turn.
       const double degrees = std::fmod(real((*r)[3], at(rw, 3)), 360.0);
-      out = glm::rotate(out, float(glm::radians(degrees)), vec3(axis / length));
+      out = glm::rotate(out, glm::radians(degrees), axis / length);
     }
     if (const json* s = member(j, "scale")) {
       const std::string sw = at(where, "scale");
       const dvec3 v = s->is_array() ? vector3(*s, sw) : dvec3(real(*s, sw));
       if (!(v.x != 0.0 && v.y != 0.0 && v.z != 0.0)) fail(sw, "a scale factor is zero");
-      out = glm::scale(out, vec3(v));
+      out = glm::scale(out, v);
     }
   }
   check_transform(out, where);
   return out;
+}
+
+// The float transform that places a mesh loaded with `origin` subtracted (MeshLoadOptions::
+// recentre) where `t` places the file's coordinates: t ∘ translate(origin), composed in double.
+glm::mat4 placed(const glm::dmat4& t, const dvec3& origin, const std::string& where) {
+  if (origin == dvec3(0.0)) return glm::mat4(t);
+  const glm::dmat4 out = glm::translate(t, origin);
+  check_transform(out, where);  // the translation may leave float's range
+  return glm::mat4(out);
 }
 
 Material material(const json& j, const std::string& where) {
@@ -381,19 +392,32 @@ Material material(const json& j, const std::string& where) {
   return m;
 }
 
-Mesh read_mesh(const json& file, const std::filesystem::path& base, const std::string& where, SceneDesc& scene) {
+// A mesh file of the scene, recentred when far from the origin for its size: the file's
+// coordinates are then positions + origin, in double (see placed()); origin is 0 otherwise.
+Mesh read_mesh(const json& file, const std::filesystem::path& base, const std::string& where, SceneDesc& scene,
+               dvec3& origin) {
   if (!file.is_string()) fail(where, std::string("expected a file name, got ") + file.type_name());
   const std::string name = file.get<std::string>();
   const std::filesystem::path p = std::filesystem::path(name).is_absolute() ? std::filesystem::path(name) : base / name;
   Mesh m;
   MeshLoadReport report;
-  if (Status s = load_mesh(p.string(), m, &report); !s.ok()) fail(where, s.message());
+  if (Status s = load_mesh(p.string(), m, &report, MeshLoadOptions{.recentre = true}); !s.ok())
+    fail(where, s.message());
+  origin = report.origin;
   scene.loaded_meshes.push_back({p.string(), report});
   return m;
 }
 
-void apply(const glm::mat4& t, Mesh& m) {
-  for (vec3& p : m.positions) p = vec3(t * glm::vec4(p, 1.0f));
+// Moves a triangle mesh's vertices into world space (where Embree takes them): t applied to the
+// file's coordinates, in double when the mesh was recentred; in float otherwise, as before.
+void apply(const glm::dmat4& t, const dvec3& origin, Mesh& m) {
+  if (origin == dvec3(0.0)) {
+    const glm::mat4 tf(t);
+    for (vec3& p : m.positions) p = vec3(tf * glm::vec4(p, 1.0f));
+    return;
+  }
+  // A vertex beyond float's range rounds to infinity (IEEE), which check_geometry reports.
+  for (vec3& p : m.positions) p = vec3(t * glm::dvec4(dvec3(p) + origin, 1.0));
 }
 
 int material_index(const json& j, const std::string& where, const SceneDesc& scene) {
@@ -578,6 +602,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   for_each_entry(j, "meshes", [&](const json& e, const std::string& w) {
     object(e, w, "a mesh: {\"file\": ...} or {\"plane\": size}");
     MeshDesc d;
+    dvec3 origin(0.0);
     if (member(e, "plane") && member(e, "file")) fail(w, "give \"file\" or \"plane\", not both");
     if (const json* plane = member(e, "plane")) {
       check_keys(e, w, {"plane", "material", "transform"});
@@ -587,12 +612,13 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
       d.source = "plane";
     } else if (const json* file = member(e, "file")) {
       check_keys(e, w, {"file", "material", "transform"});
-      d.mesh = read_mesh(*file, base, at(w, "file"), s);
+      d.mesh = read_mesh(*file, base, at(w, "file"), s, origin);
       d.source = file->get<std::string>();
     } else {
       fail(w, "expected \"file\" or \"plane\"");
     }
-    if (const json* t = member(e, "transform")) apply(transform(*t, at(w, "transform")), d.mesh);
+    const json* t = member(e, "transform");
+    if (t || origin != dvec3(0.0)) apply(t ? transform(*t, at(w, "transform")) : glm::dmat4(1.0), origin, d.mesh);
     d.material = member(e, "material") ? material_index(e["material"], at(w, "material"), s) : 0;
     s.meshes.push_back(std::move(d));
     where.meshes.push_back(w);
@@ -603,7 +629,8 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     GwnObjectDesc d;
     const json* file = member(e, "file");
     if (!file) fail(w, "expected \"file\"");
-    d.mesh = read_mesh(*file, base, at(w, "file"), s);
+    dvec3 origin(0.0);
+    d.mesh = read_mesh(*file, base, at(w, "file"), s, origin);
     d.source = file->get<std::string>();
     if (const json* mode = member(e, "mode")) {
       const std::string m = mode->is_string() ? mode->get<std::string>() : "";
@@ -629,14 +656,14 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
       if (!instances->is_array())
         fail(iw, std::string("expected an array of transforms, got ") + instances->type_name());
       for (size_t k = 0; k < instances->size(); ++k) {
-        d.instances.push_back(transform((*instances)[k], at(iw, k)));
+        d.instances.push_back(placed(transform((*instances)[k], at(iw, k)), origin, at(iw, k)));
         instance_where.push_back(at(iw, k));
       }
     } else if (const json* t = member(e, "transform")) {
-      d.instances.push_back(transform(*t, at(w, "transform")));
+      d.instances.push_back(placed(transform(*t, at(w, "transform")), origin, at(w, "transform")));
       instance_where.push_back(at(w, "transform"));
     } else {
-      d.instances.push_back(glm::mat4(1.0f));
+      d.instances.push_back(placed(glm::dmat4(1.0), origin, w));
       instance_where.push_back(w);
     }
     d.material = member(e, "material") ? material_index(e["material"], at(w, "material"), s) : 0;
@@ -742,13 +769,19 @@ Status default_scene(const std::string& mesh_path, SceneDesc& out) {
     GwnObjectDesc object;
     object.source = mesh_path;
     MeshLoadReport report;
-    if (Status st = load_mesh(mesh_path, object.mesh, &report); !st.ok()) return st;
+    // Recentred when far off: the default scene stands the mesh on the ground wherever it was.
+    if (Status st = load_mesh(mesh_path, object.mesh, &report, MeshLoadOptions{.recentre = true}); !st.ok()) return st;
     s.loaded_meshes.push_back({mesh_path, report});
     if (object.mesh.positions.empty()) return {StatusCode::kInvalidMesh, mesh_path + ": the mesh has no vertices"};
     // The framing in double, whatever the mesh's units: the float of a tiny mesh's squared
     // extent would underflow (and a huge one's overflow), which check_geometry then reports.
+    // The box of what is drawn, the triangles' corners: an unused vertex (a stray point in a
+    // scan, or the file's origin) would otherwise move the camera away from the mesh.
     Box box;
-    for (const vec3& p : object.mesh.positions) box.extend(dvec3(p));
+    for (const uvec3& t : object.mesh.triangles)
+      for (int k = 0; k < 3; ++k) box.extend(dvec3(object.mesh.positions[t[k]]));
+    if (!box.valid())  // no triangles: the plugin refuses the mesh, saying so
+      for (const vec3& p : object.mesh.positions) box.extend(dvec3(p));
     const dvec3 extent = box.hi - box.lo;
     const double size = std::max({extent.x, extent.y, extent.z});
     try {
@@ -794,7 +827,7 @@ Status default_scene(const std::string& mesh_path, SceneDesc& out) {
                              kCoordinateLimit);
       }
       s.camera = make_camera(vec3(eye), vec3(look), vec3(0.0f, 1.0f, 0.0f), float(fov_degrees), 640, 480, where.camera);
-      check_transform(s.gwn_objects[0].instances[0], "the mesh's placement on the ground");
+      check_transform(glm::dmat4(s.gwn_objects[0].instances[0]), "the mesh's placement on the ground");
       check_geometry(s, where);
     } catch (const SceneError& e) {
       return {StatusCode::kInvalidArgument,

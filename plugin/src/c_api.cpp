@@ -109,19 +109,42 @@ GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* tri
   });
 }
 
-GWNRTMesh gwnrtLoadMesh(const char* path) {
-  return guard_c_api("gwnrtLoadMesh", GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
+namespace {
+
+// gwnrtLoadMesh and gwnrtLoadMeshRecentred: `origin` is NULL for the first.
+GWNRTMesh load_and_build(const char* function, const char* path, double* origin) {
+  return guard_c_api(function, GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
     if (!path) {
-      set_error("gwnrtLoadMesh: NULL path");
+      set_error(std::string(function) + ": NULL path");
       return nullptr;
     }
+    if (origin) origin[0] = origin[1] = origin[2] = 0.0;
     Mesh mesh;
-    if (Status s = load_mesh(path, mesh); !s.ok()) {
+    MeshLoadReport report;
+    if (Status s = load_mesh(path, mesh, &report, MeshLoadOptions{.recentre = origin != nullptr}); !s.ok()) {
       set_error(s.message());
       return nullptr;
     }
-    return build(std::move(mesh), path);
+    GWNRTMesh built = build(std::move(mesh), path);
+    if (built && origin) {
+      origin[0] = report.origin.x;
+      origin[1] = report.origin.y;
+      origin[2] = report.origin.z;
+    }
+    return built;
   });
+}
+
+}  // namespace
+
+GWNRTMesh gwnrtLoadMesh(const char* path) { return load_and_build("gwnrtLoadMesh", path, nullptr); }
+
+GWNRTMesh gwnrtLoadMeshRecentred(const char* path, double origin[3]) {
+  if (!origin) {
+    set_error("gwnrtLoadMeshRecentred: NULL origin");
+    return nullptr;
+  }
+  return load_and_build("gwnrtLoadMeshRecentred", path, origin);
 }
 
 void gwnrtRetainMesh(GWNRTMesh mesh) {

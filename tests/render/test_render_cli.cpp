@@ -2,6 +2,7 @@
 // integrator produce images of the asked size; bad input ends in a message and exit code 1.
 #include <OpenImageIO/imageio.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -366,6 +367,65 @@ TEST_F(RenderCli, Issue15Item11_MeshLoadWarningsArePrinted) {
   }
   std::remove(mesh.c_str());
   std::remove(scene.c_str());
+}
+
+// All channels of an image written by gwnrt-render, as floats, pixel by pixel.
+std::vector<float> read_pixels(const std::string& path, int& channels) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return {};
+  channels = in->spec().nchannels;
+  std::vector<float> pixels(size_t(in->spec().width) * size_t(in->spec().height) * size_t(channels));
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data())) pixels.clear();
+  in->close();
+  return pixels;
+}
+
+// A georeferenced scan (bunny_holes moved to UTM metres; GwnModel::build refuses it where it lies)
+// renders recentred, and as the bunny at the origin does: the camera frames the model's box and
+// the image holds no positions. The two models differ by float rounding about the centre (1e-8
+// of a 0.2 diagonal), far below the tracer's stopping distance, so the hit kinds agree on at least
+// 99.9% of pixels (the CUDA image's criterion) and the shaded colours to 1e-3 (they depend on the
+// normal, whose change over 1e-8 is below 1e-5).
+TEST_F(RenderCli, FarOffScanRendersAsAtTheOrigin) {
+  const std::string near_path = test::data_path("bunny_holes.obj"), far_path = test::temp_path("utm_render.obj");
+  test::write_translated(near_path, far_path, test::kUtm, true);
+  std::vector<float> colour[2], stats[2];
+  int colour_channels = 0, stats_channels = 0;
+  for (int k = 0; k < 2; ++k) {
+    const std::string image = test::temp_path("utm_render.exr"), stats_image = test::temp_path("utm_stats.exr");
+    const test::RunResult r = test::run_program(
+        binary_, test::quote(k ? far_path : near_path) + " --integrator first-hit --width 64 --height 48 -o " +
+                     test::quote(image) + " --stats-image " + test::quote(stats_image));
+    ASSERT_TRUE(r.exited);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const bool said = r.err.find("far from the origin for its size: computed relative to (") != std::string::npos;
+    EXPECT_EQ(said, k == 1) << r.err;
+    EXPECT_EQ(r.err.find("written in double"), std::string::npos) << r.err;  // no positions are written
+    colour[k] = read_pixels(image, colour_channels);
+    stats[k] = read_pixels(stats_image, stats_channels);
+    std::remove(image.c_str());
+    std::remove(stats_image.c_str());
+  }
+  std::remove(far_path.c_str());
+  ASSERT_EQ(stats_channels, 7);  // R G B steps crossings kind capped
+  ASSERT_EQ(colour[0].size(), colour[1].size());
+  ASSERT_EQ(stats[0].size(), stats[1].size());
+  const size_t pixels = stats[0].size() / 7;
+  ASSERT_EQ(pixels, size_t(64 * 48));
+  size_t same_kind = 0, hits = 0;
+  float worst = 0;
+  for (size_t i = 0; i < pixels; ++i) {
+    const bool same = stats[0][7 * i + 5] == stats[1][7 * i + 5];
+    same_kind += same;
+    hits += stats[0][7 * i + 5] != 0.0f;
+    if (same)
+      for (int c = 0; c < colour_channels; ++c)
+        worst = std::max(
+            worst, std::fabs(colour[0][size_t(colour_channels) * i + c] - colour[1][size_t(colour_channels) * i + c]));
+  }
+  EXPECT_GT(hits, pixels / 10);  // the bunny is in the picture
+  EXPECT_GE(double(same_kind), 0.999 * double(pixels));
+  EXPECT_LE(worst, 1e-3f);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../cli_util.h"
+#include "../mesh_files.h"
 #include "../test_util.h"
 #include "image_output.h"
 #include "integrators/path.h"
@@ -158,8 +159,8 @@ std::string write_tetrahedron(double size, double offset, const std::string& nam
 // Item 1: the default scene made for a bare mesh, whose camera and ground are computed from the
 // mesh's box: meshes too small or too large (or too far out) for it are refused, naming the mesh.
 TEST(SceneChecks, Issue15Item1_DefaultSceneOfExtremeMeshesIsRefused) {
-  for (const auto& [size, offset] : {std::pair{1e-30, 0.0}, std::pair{1e-13, 0.0}, std::pair{1e11, 0.0},
-                                     std::pair{1e20, 0.0}, std::pair{1e3, 1e15}}) {
+  for (const auto& [size, offset] :
+       {std::pair{1e-30, 0.0}, std::pair{1e-13, 0.0}, std::pair{1e11, 0.0}, std::pair{1e20, 0.0}}) {
     const std::string path = write_tetrahedron(size, offset, "extreme.obj");
     SCOPED_TRACE(path + " size " + std::to_string(size) + " offset " + std::to_string(offset));
     SceneDesc s;
@@ -168,9 +169,12 @@ TEST(SceneChecks, Issue15Item1_DefaultSceneOfExtremeMeshesIsRefused) {
     EXPECT_NE(st.message().find(path + ": the default scene for a mesh"), std::string::npos) << st.message();
     std::remove(path.c_str());
   }
-  for (const double size : {1e-9, 1.0, 1e9}) {
-    const std::string path = write_tetrahedron(size, 0.0, "fine.obj");
-    SCOPED_TRACE(size);
+  // Far out for its size (1e3 at 1e15, where float steps by 6.7e7): recentred, then stood on the
+  // ground like any other.
+  for (const auto& [size, offset] :
+       {std::pair{1e-9, 0.0}, std::pair{1.0, 0.0}, std::pair{1e9, 0.0}, std::pair{1e3, 1e15}, std::pair{1.0, -3e13}}) {
+    const std::string path = write_tetrahedron(size, offset, "fine.obj");
+    SCOPED_TRACE(path + " size " + std::to_string(size) + " offset " + std::to_string(offset));
     SceneDesc s;
     const Status st = default_scene(path, s);
     ASSERT_TRUE(st.ok()) << st.message();
@@ -183,6 +187,71 @@ TEST(SceneChecks, Issue15Item1_DefaultSceneOfExtremeMeshesIsRefused) {
     EXPECT_LT(glm::length(glm::cross(middle - o, d)), 0.01 * size);
     std::remove(path.c_str());
   }
+}
+
+// A georeferenced scan (bunny_holes moved to UTM metres, where float steps by 0.25-0.5) is read
+// in double and recentred: a scene file's transform applies to the file's coordinates, composed
+// with the mesh's origin in double, so a scan placed back near the origin lands where the bunny
+// itself is, as a triangle mesh and as a GWN object. Error budget: the file's 17 digits (1e-10),
+// float rounding of positions about the mesh's centre and of the small composed translation
+// (each about 1e-8 here), and the float product instance · position; 1e-6 of the diagonal is
+// ample, and far below the 0.25 that rounding the file's coordinates to float would cost.
+TEST(SceneChecks, FarOffMeshesArePlacedInDouble) {
+  const Mesh bunny = test::load_test_mesh("bunny_holes.obj");
+  const std::string utm = test::temp_path("utm_bunny_holes.obj");
+  test::write_translated(test::data_path("bunny_holes.obj"), utm, test::kUtm, true);
+  dvec3 lo(bunny.positions[0]), hi = lo;
+  for (const vec3& p : bunny.positions) {
+    lo = glm::min(lo, dvec3(p));
+    hi = glm::max(hi, dvec3(p));
+  }
+  const double tolerance = 1e-6 * glm::length(hi - lo);
+  const auto worst_distance = [&](const glm::mat4& placement, const Mesh& placed, const dvec3& shift) {
+    EXPECT_EQ(placed.positions.size(), bunny.positions.size());
+    double worst = 0;
+    for (size_t i = 0; i < std::min(placed.positions.size(), bunny.positions.size()); ++i) {
+      const dvec3 world(glm::dmat4(placement) * glm::dvec4(dvec3(placed.positions[i]), 1.0));
+      worst = std::max(worst, glm::length(world - (dvec3(bunny.positions[i]) + shift)));
+    }
+    return worst;
+  };
+  const std::string back = R"({"translate": [)" + test::num(-test::kUtm[0]) + ", " + test::num(-test::kUtm[1]) + ", " +
+                           test::num(-test::kUtm[2]) + "]}";
+  SceneDesc s;
+  expect_accepted(R"({"meshes": [{"file": ")" + utm + R"(", "transform": )" + back +
+                      R"(}], "gwn_objects": [{"file": ")" + utm + R"(", "instances": [)" + back +
+                      R"(, {"scale": 1}]}]})",
+                  &s);
+  ASSERT_EQ(s.loaded_meshes.size(), 2u);
+  EXPECT_NE(s.loaded_meshes[0].report.origin, dvec3(0.0));
+  ASSERT_EQ(s.meshes.size(), 1u);
+  EXPECT_LE(worst_distance(glm::mat4(1.0f), s.meshes[0].mesh, dvec3(0.0)), tolerance);
+  ASSERT_EQ(s.gwn_objects.size(), 1u);
+  ASSERT_EQ(s.gwn_objects[0].instances.size(), 2u);
+  EXPECT_LE(worst_distance(s.gwn_objects[0].instances[0], s.gwn_objects[0].mesh, dvec3(0.0)), tolerance);
+  // The identity leaves the scan where the file puts it (float's step there is 0.5 at most).
+  const dvec3 utm_offset(test::kUtm[0], test::kUtm[1], test::kUtm[2]);
+  EXPECT_LE(worst_distance(s.gwn_objects[0].instances[1], s.gwn_objects[0].mesh, utm_offset), 0.5);
+  // The default scene stands the scan on the ground exactly as it does the bunny, framing what is
+  // drawn: a vertex no triangle uses (here at the file's origin, 4e6 away) is not framed.
+  const std::string with_unused = test::temp_path("utm_unused.obj");
+  std::filesystem::copy_file(utm, with_unused, std::filesystem::copy_options::overwrite_existing);
+  std::ofstream(with_unused, std::ios::app) << "v 0 0 0\n";
+  SceneDesc far_scene, near_scene;
+  ASSERT_TRUE(default_scene(with_unused, far_scene).ok());
+  ASSERT_TRUE(default_scene(test::data_path("bunny_holes.obj"), near_scene).ok());
+  EXPECT_LE(glm::length(dvec3(far_scene.camera.eye) - dvec3(near_scene.camera.eye)), tolerance);
+  const glm::dmat4 near_placement(near_scene.gwn_objects[0].instances[0]);
+  double worst = 0;
+  for (size_t i = 0; i < bunny.positions.size(); ++i) {
+    const dvec3 far_world(glm::dmat4(far_scene.gwn_objects[0].instances[0]) *
+                          glm::dvec4(dvec3(far_scene.gwn_objects[0].mesh.positions[i]), 1.0));
+    const dvec3 near_world(near_placement * glm::dvec4(dvec3(bunny.positions[i]), 1.0));
+    worst = std::max(worst, glm::length(far_world - near_world));
+  }
+  EXPECT_LE(worst, tolerance);
+  std::remove(utm.c_str());
+  std::remove(with_unused.c_str());
 }
 
 // Item 1, the guard behind the reader: a ray Embree would abort on (non-finite, or beyond its

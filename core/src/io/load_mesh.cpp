@@ -1,10 +1,12 @@
 // load_mesh (gwnrt/io/mesh_io.h): the reader chosen by the extension, then validate_mesh.
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <vector>
 
+#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/read_file.h"
 #include "io/readers.h"
@@ -33,7 +35,10 @@ dvec3 recentred_origin(const std::vector<dvec3>& world, const std::vector<uvec3>
   const dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
   const double largest = std::max({far.x, far.y, far.z});
   const double diagonal = glm::length(hi - lo);
-  if (!(largest > kRecentreCoordinatePerDiagonal * diagonal)) return dvec3(0.0);
+  // Also moved: a mesh beyond the coordinates a model serves (kMaxMeshCoordinate) though not far
+  // for its size (2e7 across at 1e8), which moving may bring within them.
+  if (!(largest > kRecentreCoordinatePerDiagonal * diagonal) && !(largest > double(kMaxMeshCoordinate)))
+    return dvec3(0.0);
   const dvec3 centre = 0.5 * lo + 0.5 * hi;  // halves first: lo + hi may overflow
   if (diagonal == 0) return centre;          // one point: every triangle has zero area anyway
   const double step = std::exp2(std::floor(std::log2(diagonal)));
@@ -70,9 +75,17 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
   if (options.recentre) {
     rep.origin = recentred_origin(world, m.triangles);
     if (rep.origin != dvec3(0.0)) {
-      for (size_t i = 0; i < world.size(); ++i) m.positions[i] = vec3(world[i] - rep.origin);
-      // An unused vertex far from the rest may now round to infinity.
-      if (s = validate_mesh(m, path); !s.ok()) return s;
+      for (size_t i = 0; i < world.size(); ++i) {
+        const dvec3 moved = world[i] - rep.origin;
+        m.positions[i] = vec3(moved);
+        // Only a vertex no triangle uses, far from the rest, can leave float's range here.
+        if (!(std::fabs(moved.x) <= FLT_MAX && std::fabs(moved.y) <= FLT_MAX && std::fabs(moved.z) <= FLT_MAX)) {
+          return {StatusCode::kInvalidMesh,
+                  cat(path, ": vertex ", i, " (counting from 0), at (", world[i].x, ", ", world[i].y, ", ", world[i].z,
+                      "), is beyond float's range from the origin the mesh is recentred about (", rep.origin.x, ", ",
+                      rep.origin.y, ", ", rep.origin.z, ")")};
+        }
+      }
     }
   }
 

@@ -284,6 +284,12 @@ struct BinarySource {
   std::string where(const std::string& path) const { return path; }
 
   Res read_real(Ty t, double& v) { return read_value(t, v); }
+  // A binary value is its own double.
+  Res read_real(Ty t, double& v, double& wide) {
+    const Res r = read_value(t, v);
+    wide = v;
+    return r;
+  }
   // Only called with integer types (the header rejects others where integers are needed).
   Res read_int(Ty t, int64_t& v) { return read_value(t, v); }
 
@@ -398,6 +404,15 @@ struct AsciiSource {
     return Res::kOk;
   }
 
+  // A coordinate also in double (MeshLoadOptions::recentre): a float property's text keeps the
+  // digits that its float loses far from the origin (4123456.789 would read as 4123456.75).
+  Res read_real(Ty t, double& v, double& wide) {
+    const Res r = read_real(t, v);
+    wide = v;
+    if (r == Res::kOk && t == Ty::kF32 && !parse_real(tok, wide)) return bad(t);
+    return r;
+  }
+
   // Skipped values are still checked: a malformed token would otherwise shift every value
   // after it.
   Res skip(Ty t, uint64_t n) {
@@ -460,10 +475,13 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
         if (!pr.list) {
           if (is_vertex && pr.role >= 0) {
             double v = 0;
-            r = src.read_real(pr.type, v);
+            if (world && pr.role <= kZ) {
+              r = src.read_real(pr.type, v, wide[pr.role]);
+            } else {
+              r = src.read_real(pr.type, v);
+            }
             // Integer colour channels span their type's range (uchar: 0-255).
             if (pr.role >= kRed && info(pr.type).is_int) v = std::max(v, 0.0) / double(info(pr.type).hi);
-            if (pr.role <= kZ) wide[pr.role] = v;
             value[pr.role] = static_cast<float>(v);  // IEC 559 narrowing: rounds, overflows to infinity
           } else {
             r = src.skip(pr.type, 1);

@@ -157,8 +157,11 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
 
   GwnModel model;
   examples::ModelLoad loaded;
-  if (Status s = examples::load_model(job.mesh, model, loaded); !s.ok()) return examples::fail(kProgram, s.message());
-  examples::print_load_warnings(kProgram, job.mesh, loaded.report);
+  // Recentred when far off: the camera frames the model's box, and the image holds no positions,
+  // so a georeferenced scan renders as it would at the origin.
+  if (Status s = examples::load_model(job.mesh, model, loaded, {}, MeshLoadOptions{.recentre = true}); !s.ok())
+    return examples::fail(kProgram, s.message());
+  examples::print_load_warnings(kProgram, job.mesh, loaded.report, false);
   examples::warn_if_level_out_of_reach(kProgram, model.view(), trace);
   const size_t boundary_segments = model.boundary().segment_count();
   std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,

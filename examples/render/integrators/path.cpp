@@ -268,7 +268,7 @@ int run_path_job(const PathJob& job, const std::string& description) {
   if (job.max_depth > 0) scene.render.max_depth = job.max_depth;
   if (job.seed >= 0) scene.render.seed = uint64_t(job.seed);
   scene.render.aovs = job.aovs;
-  for (const LoadedMesh& m : scene.loaded_meshes) examples::print_load_warnings(kProgram, m.path, m.report);
+  for (const LoadedMesh& m : scene.loaded_meshes) examples::print_load_warnings(kProgram, m.path, m.report, false);
   for (const std::string& w : scene.warnings) warn(w);
 
   // The pixel buffers, checked against the memory available before anything is allocated

@@ -57,6 +57,12 @@ typedef struct GWNRTOptions {
 GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* triangles, size_t triangleCount);
 /* OBJ or PLY. */
 GWNRTMesh gwnrtLoadMesh(const char* path);
+/* OBJ or PLY, its coordinates read in double; a mesh far from the origin for its size (a
+ * georeferenced scan in UTM metres, which gwnrtLoadMesh refuses: float keeps too little of it)
+ * is moved by -origin, which is returned (0, 0, 0 when it was not moved). The geometry is then in
+ * those moved coordinates: place it with an instance that adds origin back, composing the two
+ * in double, or move the scene instead. */
+GWNRTMesh gwnrtLoadMeshRecentred(const char* path, double origin[3]);
 void gwnrtRetainMesh(GWNRTMesh mesh);
 void gwnrtReleaseMesh(GWNRTMesh mesh);
 
@@ -89,6 +95,9 @@ class Mesh {
   Mesh() = default;
   explicit Mesh(GWNRTMesh adopt) : mesh_(adopt) {}
   static Mesh load(const std::string& path) { return Mesh(gwnrtLoadMesh(path.c_str())); }
+  static Mesh load_recentred(const std::string& path, double origin[3]) {
+    return Mesh(gwnrtLoadMeshRecentred(path.c_str(), origin));
+  }
   Mesh(const Mesh& o) : mesh_(o.mesh_) {
     if (mesh_) gwnrtRetainMesh(mesh_);
   }

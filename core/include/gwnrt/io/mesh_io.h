@@ -28,8 +28,9 @@ struct MeshLoadReport {
 };
 
 // A mesh is recentred (MeshLoadOptions::recentre) when its largest coordinate exceeds this many
-// times its box's diagonal: float then keeps at least 4 bits fewer of its shape than it would
-// about the origin. Meshes about the origin, the usual case, are read exactly as without recentring.
+// times its box's diagonal (float then keeps at least 4 bits fewer of its shape than it would
+// about the origin), or exceeds kMaxMeshCoordinate. Meshes about the origin, the usual case, are
+// read exactly as without recentring.
 inline constexpr double kRecentreCoordinatePerDiagonal = 16;
 
 struct MeshLoadOptions {
