@@ -343,11 +343,22 @@ glm::dmat4 transform(const json& j, const std::string& where) {
   return out;
 }
 
-// The float transform that places a mesh loaded with `origin` subtracted (MeshLoadOptions::
-// recentre) where `t` places the file's coordinates: t ∘ translate(origin), composed in double.
-glm::mat4 placed(const glm::dmat4& t, const dvec3& origin, const std::string& where) {
-  if (origin == dvec3(0.0)) return glm::mat4(t);
-  const glm::dmat4 out = glm::translate(t, origin);
+// What a scene file places in its world, kept in double until the scene's own origin is known
+// (read_scene): a mesh's coordinates, recentred when it was loaded, are positions + origin in the
+// file's; a transform takes them to the file's world; the scene is then moved by -scene_origin
+// (nonzero for a scene far from the origin for its size) before float keeps it for Embree.
+struct Placement {
+  glm::dmat4 transform{1.0};  // the file's transform, or the identity
+  dvec3 origin{0.0};          // the mesh's MeshLoadReport::origin
+  bool transformed = false;   // the file gave a transform
+  // Object (the mesh as loaded) to the file's world.
+  glm::dmat4 world_from_object() const { return glm::translate(transform, origin); }
+};
+
+// The float transform Embree gets for an instance: its placement moved by -scene_origin.
+glm::mat4 instance_transform(const Placement& p, const dvec3& scene_origin, const std::string& where) {
+  if (p.origin == dvec3(0.0) && scene_origin == dvec3(0.0)) return glm::mat4(p.transform);
+  const glm::dmat4 out = glm::translate(glm::dmat4(1.0), -scene_origin) * p.world_from_object();
   check_transform(out, where);  // the translation may leave float's range
   return glm::mat4(out);
 }
@@ -408,16 +419,18 @@ Mesh read_mesh(const json& file, const std::filesystem::path& base, const std::s
   return m;
 }
 
-// Moves a triangle mesh's vertices into world space (where Embree takes them): t applied to the
-// file's coordinates, in double when the mesh was recentred; in float otherwise, as before.
-void apply(const glm::dmat4& t, const dvec3& origin, Mesh& m) {
-  if (origin == dvec3(0.0)) {
-    const glm::mat4 tf(t);
+// Moves a triangle mesh's vertices into world space (where Embree takes them), less
+// scene_origin: in double when either origin is nonzero; in float otherwise, as before.
+void apply(const Placement& placement, const dvec3& scene_origin, Mesh& m) {
+  if (placement.origin == dvec3(0.0) && scene_origin == dvec3(0.0)) {
+    if (!placement.transformed) return;
+    const glm::mat4 tf(placement.transform);
     for (vec3& p : m.positions) p = vec3(tf * glm::vec4(p, 1.0f));
     return;
   }
+  const glm::dmat4 t = glm::translate(glm::dmat4(1.0), -scene_origin) * placement.world_from_object();
   // A vertex beyond float's range rounds to infinity (IEEE), which check_geometry reports.
-  for (vec3& p : m.positions) p = vec3(t * glm::dvec4(dvec3(p) + origin, 1.0));
+  for (vec3& p : m.positions) p = vec3(t * glm::dvec4(dvec3(p), 1.0));
 }
 
 int material_index(const json& j, const std::string& where, const SceneDesc& scene) {
@@ -516,23 +529,35 @@ void note_level_out_of_reach(const GwnObjectDesc& object, const std::string& whe
     s.warnings.push_back(where + ": " + *why);
 }
 
-void read_camera(const json* c, SceneDesc& s, Locations& where) {
+// A scene file's "camera" block, its eye and target in double (the scene may be moved).
+struct CameraDesc {
   // What a missing "camera" block or key means.
-  vec3 eye(0.0f, 0.0f, 5.0f), target(0.0f), up(0.0f, 1.0f, 0.0f);
+  dvec3 eye{0.0, 0.0, 5.0}, target{0.0}, up{0.0, 1.0, 0.0};
   float fov_degrees = 40.0f;  // vertical
   int width = 640, height = 480;
+
+  // The camera, in the scene moved by -scene_origin.
+  examples::PinholeCamera make(const dvec3& scene_origin, const std::string& where) const {
+    return make_camera(vec3(eye - scene_origin), vec3(target - scene_origin), vec3(up), fov_degrees, width, height,
+                       where);
+  }
+};
+
+CameraDesc read_camera(const json* c, SceneDesc& s, Locations& where) {
+  CameraDesc cam;
   where.camera = "/camera";
   if (c) {
     object(*c, where.camera, "the camera");
     check_keys(*c, where.camera, {"eye", "target", "up", "fov", "width", "height"});
-    if (const json* v = member(*c, "eye")) eye = vec3(vector3(*v, "/camera/eye"));
-    if (const json* v = member(*c, "target")) target = vec3(vector3(*v, "/camera/target"));
-    if (const json* v = member(*c, "up")) up = vec3(vector3(*v, "/camera/up"));
-    if (const json* v = member(*c, "fov")) fov_degrees = number(*v, "/camera/fov");
-    if (const json* v = member(*c, "width")) width = integer(*v, "/camera/width", 1, 1 << 15);
-    if (const json* v = member(*c, "height")) height = integer(*v, "/camera/height", 1, 1 << 15);
+    if (const json* v = member(*c, "eye")) cam.eye = vector3(*v, "/camera/eye");
+    if (const json* v = member(*c, "target")) cam.target = vector3(*v, "/camera/target");
+    if (const json* v = member(*c, "up")) cam.up = vector3(*v, "/camera/up");
+    if (const json* v = member(*c, "fov")) cam.fov_degrees = number(*v, "/camera/fov");
+    if (const json* v = member(*c, "width")) cam.width = integer(*v, "/camera/width", 1, 1 << 15);
+    if (const json* v = member(*c, "height")) cam.height = integer(*v, "/camera/height", 1, 1 << 15);
   }
-  s.camera = make_camera(eye, target, up, fov_degrees, width, height, where.camera);
+  s.camera = cam.make(dvec3(0.0), where.camera);  // checked as given; made again if the scene moves
+  return cam;
 }
 
 void read_render(const json& r, RenderSettings& settings) {
@@ -586,7 +611,9 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   check_keys(j, "", {"camera", "render", "materials", "meshes", "gwn_objects", "environment", "sun"});
   Locations where;
   where.scene = "/";
-  read_camera(member(j, "camera"), s, where);
+  const CameraDesc camera = read_camera(member(j, "camera"), s, where);
+  std::vector<Placement> mesh_placements;                   // per SceneDesc::meshes
+  std::vector<std::vector<Placement>> instance_placements;  // per SceneDesc::gwn_objects, per instance
   if (const json* r = member(j, "render")) read_render(*r, s.render);
   if (const json* materials = member(j, "materials")) {
     object(*materials, "/materials", "named materials");
@@ -602,7 +629,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   for_each_entry(j, "meshes", [&](const json& e, const std::string& w) {
     object(e, w, "a mesh: {\"file\": ...} or {\"plane\": size}");
     MeshDesc d;
-    dvec3 origin(0.0);
+    Placement placement;
     if (member(e, "plane") && member(e, "file")) fail(w, "give \"file\" or \"plane\", not both");
     if (const json* plane = member(e, "plane")) {
       check_keys(e, w, {"plane", "material", "transform"});
@@ -612,13 +639,16 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
       d.source = "plane";
     } else if (const json* file = member(e, "file")) {
       check_keys(e, w, {"file", "material", "transform"});
-      d.mesh = read_mesh(*file, base, at(w, "file"), s, origin);
+      d.mesh = read_mesh(*file, base, at(w, "file"), s, placement.origin);
       d.source = file->get<std::string>();
     } else {
       fail(w, "expected \"file\" or \"plane\"");
     }
-    const json* t = member(e, "transform");
-    if (t || origin != dvec3(0.0)) apply(t ? transform(*t, at(w, "transform")) : glm::dmat4(1.0), origin, d.mesh);
+    if (const json* t = member(e, "transform")) {
+      placement.transform = transform(*t, at(w, "transform"));
+      placement.transformed = true;
+    }
+    mesh_placements.push_back(placement);
     d.material = member(e, "material") ? material_index(e["material"], at(w, "material"), s) : 0;
     s.meshes.push_back(std::move(d));
     where.meshes.push_back(w);
@@ -631,6 +661,12 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     if (!file) fail(w, "expected \"file\"");
     dvec3 origin(0.0);
     d.mesh = read_mesh(*file, base, at(w, "file"), s, origin);
+    std::vector<Placement> placements;
+    std::vector<std::string> instance_where_list;
+    const auto place = [&](const glm::dmat4& t, const std::string& instance_where) {
+      placements.push_back({t, origin, true});
+      instance_where_list.push_back(instance_where);
+    };
     d.source = file->get<std::string>();
     if (const json* mode = member(e, "mode")) {
       const std::string m = mode->is_string() ? mode->get<std::string>() : "";
@@ -648,27 +684,22 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     if (const json* v = member(e, "beta")) d.options.beta = number(*v, at(w, "beta"));
     if (Status st = validate_trace_options(d.options); !st.ok()) fail(w, st.message());
     note_level_out_of_reach(d, member(e, "level") ? at(w, "level") : w, s);
-    std::vector<std::string> instance_where;
     const json* instances = member(e, "instances");
     if (instances && member(e, "transform")) fail(w, "give \"instances\" or \"transform\", not both");
     if (instances) {
       const std::string iw = at(w, "instances");
       if (!instances->is_array())
         fail(iw, std::string("expected an array of transforms, got ") + instances->type_name());
-      for (size_t k = 0; k < instances->size(); ++k) {
-        d.instances.push_back(placed(transform((*instances)[k], at(iw, k)), origin, at(iw, k)));
-        instance_where.push_back(at(iw, k));
-      }
+      for (size_t k = 0; k < instances->size(); ++k) place(transform((*instances)[k], at(iw, k)), at(iw, k));
     } else if (const json* t = member(e, "transform")) {
-      d.instances.push_back(placed(transform(*t, at(w, "transform")), origin, at(w, "transform")));
-      instance_where.push_back(at(w, "transform"));
+      place(transform(*t, at(w, "transform")), at(w, "transform"));
     } else {
-      d.instances.push_back(placed(glm::dmat4(1.0), origin, w));
-      instance_where.push_back(w);
+      place(glm::dmat4(1.0), w);
     }
     d.material = member(e, "material") ? material_index(e["material"], at(w, "material"), s) : 0;
     s.gwn_objects.push_back(std::move(d));
-    where.instances.push_back(std::move(instance_where));
+    where.instances.push_back(std::move(instance_where_list));
+    instance_placements.push_back(std::move(placements));
   });
   if (const json* e = member(j, "environment")) read_environment(*e, base, s.environment);
   if (const json* e = member(j, "sun")) read_sun(*e, s.sun);
@@ -676,6 +707,36 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   // sections were left out is a mistake far more often than a picture of the sky (scene.h).
   if (s.meshes.empty() && s.gwn_objects.empty())
     fail("", "the scene has nothing to render: give \"meshes\" or \"gwn_objects\" (or both)");
+
+  // The box of the scene's geometry and eye in the file's world, in double: a scene far from the
+  // origin for its size (a site of georeferenced scans in UTM metres, its camera among them) is
+  // moved about its own centre, as a mesh is when loaded, or float's step there (0.25 at 4e6)
+  // shows in the image. Only for its size: a scene beyond the coordinate limit that is as large
+  // as its distance from the origin is refused (check_geometry), moved or not.
+  Box world;
+  for (size_t i = 0; i < s.meshes.size(); ++i) {
+    const glm::dmat4 t = mesh_placements[i].world_from_object();
+    for (const vec3& p : s.meshes[i].mesh.positions) world.extend(dvec3(t * glm::dvec4(dvec3(p), 1.0)));
+  }
+  for (size_t i = 0; i < s.gwn_objects.size(); ++i) {
+    Box object;
+    for (const vec3& p : s.gwn_objects[i].mesh.positions) object.extend(dvec3(p));
+    if (!object.valid()) continue;  // no vertices: the plugin refuses the mesh, naming it
+    for (const Placement& placement : instance_placements[i]) {
+      const glm::dmat4 t = placement.world_from_object();
+      for (int c = 0; c < 8; ++c) world.extend(dvec3(t * glm::dvec4(object.corner(c), 1.0)));
+    }
+  }
+  if (world.valid()) {
+    world.extend(camera.eye);
+    s.origin = recentring_origin(world.lo, world.hi, std::numeric_limits<double>::infinity());
+  }
+  for (size_t i = 0; i < s.meshes.size(); ++i) apply(mesh_placements[i], s.origin, s.meshes[i].mesh);
+  for (size_t i = 0; i < s.gwn_objects.size(); ++i)
+    for (size_t k = 0; k < instance_placements[i].size(); ++k)
+      s.gwn_objects[i].instances.push_back(
+          instance_transform(instance_placements[i][k], s.origin, where.instances[i][k]));
+  if (s.origin != dvec3(0.0)) s.camera = camera.make(s.origin, where.camera);
   check_geometry(s, where);
 }
 

@@ -98,6 +98,10 @@ struct SceneDesc {
   EnvironmentDesc environment;
   Sun sun;
   std::vector<LoadedMesh> loaded_meshes;  // every mesh file read, in order
+  // Where the scene's coordinate 0 lies in the file's world: nonzero for a scene far from the
+  // origin for its size (recentring_origin of its geometry and eye), which is moved by -origin,
+  // camera and all, before float keeps it. The image is the same; only precision changes.
+  dvec3 origin{0.0};
   // What was accepted but deserves a word, for the program to print: "<file>: <JSON location>:
   // ..." (a GWN object whose level w never reaches, so that it renders nothing).
   std::vector<std::string> warnings;

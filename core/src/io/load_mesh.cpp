@@ -32,17 +32,9 @@ dvec3 recentred_origin(const std::vector<dvec3>& world, const std::vector<uvec3>
       lo = glm::min(lo, world[t[k]]);
       hi = glm::max(hi, world[t[k]]);
     }
-  const dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
-  const double largest = std::max({far.x, far.y, far.z});
-  const double diagonal = glm::length(hi - lo);
   // Also moved: a mesh beyond the coordinates a model serves (kMaxMeshCoordinate) though not far
   // for its size (2e7 across at 1e8), which moving may bring within them.
-  if (!(largest > kRecentreCoordinatePerDiagonal * diagonal) && !(largest > double(kMaxMeshCoordinate)))
-    return dvec3(0.0);
-  const dvec3 centre = 0.5 * lo + 0.5 * hi;  // halves first: lo + hi may overflow
-  if (diagonal == 0) return centre;          // one point: every triangle has zero area anyway
-  const double step = std::exp2(std::floor(std::log2(diagonal)));
-  return glm::round(centre / step) * step;
+  return recentring_origin(lo, hi, double(kMaxMeshCoordinate));
 }
 
 Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* report,
@@ -102,6 +94,17 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
 }
 
 }  // namespace
+
+dvec3 recentring_origin(const dvec3& lo, const dvec3& hi, double max_coordinate) {
+  const dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double largest = std::max({far.x, far.y, far.z});
+  const double diagonal = glm::length(hi - lo);
+  if (!(largest > kRecentreCoordinatePerDiagonal * diagonal) && !(largest > max_coordinate)) return dvec3(0.0);
+  const dvec3 centre = 0.5 * lo + 0.5 * hi;  // halves first: lo + hi may overflow
+  if (diagonal == 0) return centre;          // one point: every triangle has zero area anyway
+  const double step = std::exp2(std::floor(std::log2(diagonal)));
+  return glm::round(centre / step) * step;
+}
 
 Status load_mesh(const std::string& path, Mesh& mesh, MeshLoadReport* report, const MeshLoadOptions& options) {
   return guard_status(path.c_str(), [&] { return load_mesh_unguarded(path, mesh, report, options); });

@@ -270,6 +270,10 @@ int run_path_job(const PathJob& job, const std::string& description) {
   scene.render.aovs = job.aovs;
   for (const LoadedMesh& m : scene.loaded_meshes) examples::print_load_warnings(kProgram, m.path, m.report, false);
   for (const std::string& w : scene.warnings) warn(w);
+  // Not a warning, as for a mesh (print_load_warnings): said because it explains the figures.
+  if (scene.origin != dvec3(0.0))
+    std::fprintf(stderr, "%s: %s: far from the origin for its size: rendered relative to (%.17g, %.17g, %.17g)\n",
+                 kProgram, job.input.c_str(), scene.origin.x, scene.origin.y, scene.origin.z);
 
   // The pixel buffers, checked against the memory available before anything is allocated
   // (issue 15, item 3): the image (3 channels, 10 with AOVs), PNG's tone-mapped copy, and what

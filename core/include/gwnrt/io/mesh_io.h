@@ -46,6 +46,13 @@ struct MeshLoadOptions {
   bool recentre = false;
 };
 
+// The origin that recentring moves geometry whose box is [lo, hi] (in double) by: zero when the
+// box lies within kRecentreCoordinatePerDiagonal diagonals of the origin and within
+// ±max_coordinate; otherwise its centre rounded to a multiple of the largest power of 2 not
+// above its diagonal. MeshLoadOptions::recentre uses it on the triangles' corners; gwnrt-render
+// on a whole scene.
+dvec3 recentring_origin(const dvec3& lo, const dvec3& hi, double max_coordinate);
+
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
 // into triangles. Texture coordinates (OBJ vt; PLY u v, s t, texture_u texture_v, texture_s
 // texture_t per vertex, or a face texcoord list) and vertex colours (OBJ v x y z r g b; PLY red
