@@ -520,7 +520,8 @@ TEST(MeshIoValidate, InMemory) {
   m.positions[3].z = -std::numeric_limits<float>::infinity();
   s = validate_mesh(m);
   EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
-  EXPECT_EQ(s.message(), "mesh: vertex 3 has a non-finite coordinate (0, 0, -inf)");
+  EXPECT_EQ(s.message(),
+            "mesh: vertex 3 has a non-finite coordinate (0, 0, -inf): infinite, or beyond float's range (+-3.4e38)");
 
   m = tetrahedron();
   m.triangles[2] = {0, 7, 2};
@@ -641,6 +642,7 @@ std::vector<BadCase> bad_cases() {
        {":2:", "vertex 2 has a non-finite coordinate (nan, 0, 1)"}},
       {"obj_inf.obj", kTri + "v 0 -inf 0\nf 1 2 3\n", M, {":4:", "vertex 4", "non-finite", "-inf"}},
       {"obj_overflow.obj", kTri + "v 1e999 0 0\nf 1 2 3\n", M, {":4:", "non-finite", "inf"}},
+      {"obj_beyond_float.obj", kTri + "v 3.5e38 0 0\nf 1 2 3\n", M, {":4:", "infinite, or beyond float's range"}},
       {"obj_two_corners.obj", kTri + "f 1 2\n", M, {":4:", "face has 2 corners"}},
       {"obj_no_corners.obj", kTri + "f\n", M, {":4:", "face has 0 corners"}},
       {"obj_empty.obj", "", M, {"the mesh has no triangles"}},

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <charconv>
+#include <cmath>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -33,6 +34,15 @@ std::string cat(const Parts&... parts) {
   std::string s;
   (append(s, parts), ...);
   return s;
+}
+
+// "has a non-finite coordinate (x, y, z)", for a vertex's message. Readers round a number beyond
+// float's range to infinity, so an infinity is said to be either (the file may hold neither
+// "inf" nor anything non-finite: 3.5e38, or a double far out).
+inline std::string non_finite_coordinate(float x, float y, float z) {
+  const bool infinite = std::isinf(x) || std::isinf(y) || std::isinf(z);
+  return cat("has a non-finite coordinate (", x, ", ", y, ", ", z, ")",
+             infinite ? std::string_view(": infinite, or beyond float's range (+-3.4e38)") : std::string_view());
 }
 
 }  // namespace gwnrt

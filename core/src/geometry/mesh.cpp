@@ -57,8 +57,7 @@ Status validate_mesh(const Mesh& mesh, const std::string& source) {
   for (size_t i = 0; i < pos.size(); ++i) {
     const vec3& p = pos[i];
     if (!is_finite(p.x) || !is_finite(p.y) || !is_finite(p.z)) {
-      return {StatusCode::kInvalidMesh,
-              cat(source, ": vertex ", i, " has a non-finite coordinate (", p.x, ", ", p.y, ", ", p.z, ")")};
+      return {StatusCode::kInvalidMesh, cat(source, ": vertex ", i, " ", non_finite_coordinate(p.x, p.y, p.z))};
     }
   }
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {

@@ -128,8 +128,7 @@ Status read_obj(const std::string& path, string_view data, Mesh& mesh, MeshLoadR
       pos.emplace_back(c[0], c[1], c[2]);
       if (world) world->push_back(wide);
       if (!is_finite(c[0]) || !is_finite(c[1]) || !is_finite(c[2])) {
-        return {StatusCode::kInvalidMesh,
-                at("vertex ", pos.size(), " has a non-finite coordinate (", c[0], ", ", c[1], ", ", c[2], ")")};
+        return {StatusCode::kInvalidMesh, at("vertex ", pos.size(), " ", non_finite_coordinate(c[0], c[1], c[2]))};
       }
       if (n == 6) {
         if (!is_finite(c[3]) || !is_finite(c[4]) || !is_finite(c[5])) {

@@ -36,8 +36,7 @@ Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
   for (size_t i = 0; i < pos.size(); ++i) {
     const vec3& p = pos[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      return {StatusCode::kInvalidMesh,
-              cat(where, ": vertex ", i, " has a non-finite coordinate (", p.x, ", ", p.y, ", ", p.z, ")")};
+      return {StatusCode::kInvalidMesh, cat(where, ": vertex ", i, " ", non_finite_coordinate(p.x, p.y, p.z))};
   }
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
