@@ -218,10 +218,18 @@ int main(int argc, char** argv) {
     // overrides them.
     // 0 and negative values are refused when given (issue 15, item 15): leaving an option out is
     // how the scene's value is kept.
-    if (app.count("--spp") && spp < 1) return fail("--spp must be at least 1 (leave it out for the scene's)");
-    if (app.count("--max-depth") && max_depth < 1)
-      return fail("--max-depth must be at least 1 (leave it out for the scene's)");
-    if (app.count("--seed") && seed < 0) return fail("--seed must be 0 or more (leave it out for the scene's)");
+    // Within the ranges a scene file takes (kMaxSpp, kMaxPathDepth, kMaxSeed).
+    const auto in_range = [&](const char* name, int64_t value, int64_t lo, int64_t hi) {
+      return !app.count(name) || (value >= lo && value <= hi);
+    };
+    const auto refuse = [&](const char* name, int64_t lo, int64_t hi) {
+      return fail(std::string(name) + " must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                  "] (leave it out for the scene's)");
+    };
+    if (!in_range("--spp", spp, 1, gwnrt::render::kMaxSpp)) return refuse("--spp", 1, gwnrt::render::kMaxSpp);
+    if (!in_range("--max-depth", max_depth, 1, gwnrt::render::kMaxPathDepth))
+      return refuse("--max-depth", 1, gwnrt::render::kMaxPathDepth);
+    if (!in_range("--seed", seed, 0, gwnrt::render::kMaxSeed)) return refuse("--seed", 0, gwnrt::render::kMaxSeed);
     // The first hit's own options would be silently ignored here (`--level 1e39` exited 0): a
     // scene file sets the surface per GWN object.
     for (const char* name : {"--shading", "--azimuth", "--elevation", "--fov", "--mode", "--level", "--eps",

@@ -563,9 +563,9 @@ CameraDesc read_camera(const json* c, SceneDesc& s, Locations& where) {
 void read_render(const json& r, RenderSettings& settings) {
   object(r, "/render", "the render settings");
   check_keys(r, "/render", {"spp", "max_depth", "seed"});
-  if (const json* v = member(r, "spp")) settings.spp = integer(*v, "/render/spp", 1, 1 << 20);
-  if (const json* v = member(r, "max_depth")) settings.max_depth = integer(*v, "/render/max_depth", 1, 1000);
-  if (const json* v = member(r, "seed")) settings.seed = uint64_t(integer(*v, "/render/seed", 0, 1 << 30));
+  if (const json* v = member(r, "spp")) settings.spp = integer(*v, "/render/spp", 1, kMaxSpp);
+  if (const json* v = member(r, "max_depth")) settings.max_depth = integer(*v, "/render/max_depth", 1, kMaxPathDepth);
+  if (const json* v = member(r, "seed")) settings.seed = uint64_t(integer(*v, "/render/seed", 0, kMaxSeed));
 }
 
 void read_environment(const json& e, const std::filesystem::path& base, EnvironmentDesc& env) {

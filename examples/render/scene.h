@@ -53,6 +53,10 @@
 
 namespace gwnrt::render {
 
+// The ranges a scene file's "render" block and the command line take: beyond them a render
+// would run for days (2^20 samples per pixel of 640 x 480 is 3e11 paths) or mean nothing.
+inline constexpr int kMaxSpp = 1 << 20, kMaxPathDepth = 1000, kMaxSeed = 1 << 30;
+
 // How the path tracer renders: a scene file's "render" block, overridden by the command line.
 struct RenderSettings {
   int spp = 16;
