@@ -73,6 +73,35 @@ TEST_F(ConsistencyCli, AgainstItselfEveryQuantityAgrees) {
     EXPECT_EQ(quantities.count(q), 1u) << q;
 }
 
+// A georeferenced mesh (a tetrahedron at UTM coordinates, which the build refuses where it lies)
+// is compared recentred, as the other programs take it, on the given points (from standard
+// input, which is read once and parsed again with the mesh's origin) and rays.
+TEST_F(ConsistencyCli, FarOffMeshIsComparedRecentred) {
+  const std::string mesh = test::temp_path("utm_consistency.obj"), points = test::temp_path("utm_points.txt"),
+                    rays = test::temp_path("utm_rays.txt"), json = test::temp_path("utm_consistency.json");
+  test::write_far_tetrahedron(mesh);
+  std::ofstream(points) << "512345.878 4123456.989 123.45\n512345.928 4123457.039 123.5\n";
+  std::ofstream(rays) << "512345.878 4123456.989 130 0 0 -1\n";
+  const test::RunResult r = test::run_program(
+      binary_,
+      "--against cpu --resolution 8 --image-width 8 --image-height 6 --threads 2 --mesh " + test::quote(mesh) +
+          " --points - --rays " + test::quote(rays) + " --json " + test::quote(json),
+      points);
+  ASSERT_TRUE(r.exited);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.err.find("far from the origin for its size: computed relative to ("), std::string::npos) << r.err;
+  std::ifstream in(json);
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  size_t w_items = 0, trace_items = 0;
+  for (const auto& row : doc.at("rows")) {
+    if (row.at("quantity") == "w, brute") w_items = row.at("items").get<size_t>();
+    if (row.at("quantity") == "trace hit") trace_items = row.at("items").get<size_t>();
+  }
+  EXPECT_EQ(w_items, 2u);  // the given points, not a generated set
+  EXPECT_EQ(trace_items, 1u);
+  for (const std::string& f : {mesh, points, rays, json}) std::remove(f.c_str());
+}
+
 TEST_F(ConsistencyCli, BadInputIsNamed) {
   const test::RunResult mesh = test::run_program(binary_, "--against cpu --mesh /no/such/mesh.obj");
   ASSERT_TRUE(mesh.exited);

@@ -413,19 +413,43 @@ int main(int argc, char** argv) {
   const examples::ThreadLimit thread_limit(threads);
   std::vector<vec3> given_points;
   std::vector<Ray> given_rays;
+  // Read once (standard input cannot be read again), parsed again for a recentred mesh.
+  std::string points_text, points_source, rays_text, rays_source;
   if (!points_path.empty()) {
-    if (Status s = examples::read_points(points_path, given_points); !s.ok())
+    if (Status s = examples::read_text(points_path, points_text, points_source); !s.ok())
+      return examples::fail(kProgram, s.message());
+    if (Status s = examples::parse_points(points_text, points_source, given_points); !s.ok())
       return examples::fail(kProgram, s.message());
   }
   if (!rays_path.empty()) {
-    if (Status s = examples::read_rays(rays_path, given_rays); !s.ok()) return examples::fail(kProgram, s.message());
+    if (Status s = examples::read_text(rays_path, rays_text, rays_source); !s.ok())
+      return examples::fail(kProgram, s.message());
+    if (Status s = examples::parse_rays(rays_text, rays_source, given_rays); !s.ok())
+      return examples::fail(kProgram, s.message());
   }
 
   std::vector<Row> rows;
   for (const std::string& path : meshes) {
     GwnModel model;
     examples::ModelLoad loaded;
-    if (Status s = examples::load_model(path, model, loaded); !s.ok()) return examples::fail(kProgram, s.message());
+    // Recentred when far off, as the other programs do; given points and rays are then read
+    // again, moved by the mesh's origin (both backends answer about the same moved model).
+    if (Status s = examples::load_model(path, model, loaded, {}, MeshLoadOptions{.recentre = true}); !s.ok())
+      return examples::fail(kProgram, s.message());
+    examples::print_load_warnings(kProgram, path, loaded.report, false);
+    const dvec3 origin = loaded.report.origin;
+    std::vector<vec3> moved_points;
+    std::vector<Ray> moved_rays;
+    if (origin != dvec3(0.0) && !points_path.empty()) {
+      if (Status s = examples::parse_points(points_text, points_source, moved_points, origin); !s.ok())
+        return examples::fail(kProgram, s.message());
+    }
+    if (origin != dvec3(0.0) && !rays_path.empty()) {
+      if (Status s = examples::parse_rays(rays_text, rays_source, moved_rays, origin); !s.ok())
+        return examples::fail(kProgram, s.message());
+    }
+    const std::vector<vec3>& points = origin != dvec3(0.0) ? moved_points : given_points;
+    const std::vector<Ray>& rays = origin != dvec3(0.0) ? moved_rays : given_rays;
     const Backend cpu = cpu_backend(model);
     Backend other = cpu;
 #if defined(GWNRT_HAVE_CUDA)
@@ -449,9 +473,9 @@ int main(int argc, char** argv) {
                }};
     }
 #endif
-    if (Status s = compare_mesh(path, cpu, other, points_path.empty() ? nullptr : &given_points,
-                                rays_path.empty() ? nullptr : &given_rays, count, resolution, image_width, image_height,
-                                model, rows);
+    if (Status s =
+            compare_mesh(path, cpu, other, points_path.empty() ? nullptr : &points, rays_path.empty() ? nullptr : &rays,
+                         count, resolution, image_width, image_height, model, rows);
         !s.ok())
       return examples::fail(kProgram, s.message());
   }
