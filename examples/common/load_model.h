@@ -35,11 +35,7 @@ inline Status load_model(const std::string& path, GwnModel& model, ModelLoad& in
   const auto t_build = std::chrono::steady_clock::now();
   if (Status s = GwnModel::build(std::move(mesh), model, options); !s.ok()) {
     // The build names coordinates as the model holds them: say how they relate to the file's.
-    char moved[160] = "";
-    if (info.report.origin != dvec3(0.0))
-      std::snprintf(moved, sizeof moved, " (coordinates relative to (%.17g, %.17g, %.17g), the mesh being recentred)",
-                    info.report.origin.x, info.report.origin.y, info.report.origin.z);
-    return {s.code(), path + ": " + s.message() + moved};
+    return {s.code(), path + ": " + s.message() + recentred_note(info.report.origin)};
   }
   info.build_seconds = seconds_since(t_build);
   return Status::Ok();

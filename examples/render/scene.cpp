@@ -319,6 +319,9 @@ glm::dmat4 transform(const json& j, const std::string& where) {
     if (!m->is_array() || m->size() != 16) fail(mw, "expected 16 numbers (row-major)");
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) out[c][r] = real((*m)[size_t(4 * r + c)], at(mw, size_t(4 * r + c)));
+    // The last row as float reads it (as it was read before transforms were kept in double):
+    // 1.0000000001 there is 1, and the matrix affine.
+    for (int c = 0; c < 4; ++c) out[c][3] = double(float(out[c][3]));
   } else {
     check_keys(j, where, {"translate", "rotate", "scale", "matrix"});
     if (const json* t = member(j, "translate")) out = glm::translate(out, vector3(*t, at(where, "translate")));
@@ -543,7 +546,7 @@ struct CameraDesc {
   }
 };
 
-CameraDesc read_camera(const json* c, SceneDesc& s, Locations& where) {
+CameraDesc read_camera(const json* c, Locations& where) {
   CameraDesc cam;
   where.camera = "/camera";
   if (c) {
@@ -556,7 +559,9 @@ CameraDesc read_camera(const json* c, SceneDesc& s, Locations& where) {
     if (const json* v = member(*c, "width")) cam.width = integer(*v, "/camera/width", 1, 1 << 15);
     if (const json* v = member(*c, "height")) cam.height = integer(*v, "/camera/height", 1, 1 << 15);
   }
-  s.camera = cam.make(dvec3(0.0), where.camera);  // checked as given; made again if the scene moves
+  // Checked as given, so that its errors come first (an eye beyond the coordinate limit is
+  // refused even where the scene would be moved); made again once the scene's origin is known.
+  cam.make(dvec3(0.0), where.camera);
   return cam;
 }
 
@@ -611,7 +616,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   check_keys(j, "", {"camera", "render", "materials", "meshes", "gwn_objects", "environment", "sun"});
   Locations where;
   where.scene = "/";
-  const CameraDesc camera = read_camera(member(j, "camera"), s, where);
+  const CameraDesc camera = read_camera(member(j, "camera"), where);
   std::vector<Placement> mesh_placements;                   // per SceneDesc::meshes
   std::vector<std::vector<Placement>> instance_placements;  // per SceneDesc::gwn_objects, per instance
   if (const json* r = member(j, "render")) read_render(*r, s.render);
@@ -713,15 +718,20 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   // moved about its own centre, as a mesh is when loaded, or float's step there (0.25 at 4e6)
   // shows in the image. Only for its size: a scene beyond the coordinate limit that is as large
   // as its distance from the origin is refused (check_geometry), moved or not.
+  // What is drawn counts, the triangles' corners, as for a mesh: a stray unused vertex (at the
+  // file's 0, say) would keep a far-off scene from moving.
+  const auto drawn_box = [](const Mesh& m, const glm::dmat4& t) {
+    Box box;
+    for (const uvec3& tri : m.triangles)
+      for (int k = 0; k < 3; ++k) box.extend(dvec3(t * glm::dvec4(dvec3(m.positions[tri[k]]), 1.0)));
+    return box;
+  };
   Box world;
-  for (size_t i = 0; i < s.meshes.size(); ++i) {
-    const glm::dmat4 t = mesh_placements[i].world_from_object();
-    for (const vec3& p : s.meshes[i].mesh.positions) world.extend(dvec3(t * glm::dvec4(dvec3(p), 1.0)));
-  }
+  for (size_t i = 0; i < s.meshes.size(); ++i)
+    world.extend(drawn_box(s.meshes[i].mesh, mesh_placements[i].world_from_object()));
   for (size_t i = 0; i < s.gwn_objects.size(); ++i) {
-    Box object;
-    for (const vec3& p : s.gwn_objects[i].mesh.positions) object.extend(dvec3(p));
-    if (!object.valid()) continue;  // no vertices: the plugin refuses the mesh, naming it
+    const Box object = drawn_box(s.gwn_objects[i].mesh, glm::dmat4(1.0));
+    if (!object.valid()) continue;  // no triangles: the plugin refuses the mesh, naming it
     for (const Placement& placement : instance_placements[i]) {
       const glm::dmat4 t = placement.world_from_object();
       for (int c = 0; c < 8; ++c) world.extend(dvec3(t * glm::dvec4(object.corner(c), 1.0)));
@@ -736,7 +746,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     for (size_t k = 0; k < instance_placements[i].size(); ++k)
       s.gwn_objects[i].instances.push_back(
           instance_transform(instance_placements[i][k], s.origin, where.instances[i][k]));
-  if (s.origin != dvec3(0.0)) s.camera = camera.make(s.origin, where.camera);
+  s.camera = camera.make(s.origin, where.camera);
   check_geometry(s, where);
 }
 

@@ -114,11 +114,11 @@ namespace {
 // gwnrtLoadMesh and gwnrtLoadMeshRecentred: `origin` is NULL for the first.
 GWNRTMesh load_and_build(const char* function, const char* path, double* origin) {
   return guard_c_api(function, GWNRTMesh(nullptr), [&]() -> GWNRTMesh {
+    if (origin) origin[0] = origin[1] = origin[2] = 0.0;
     if (!path) {
       set_error(std::string(function) + ": NULL path");
       return nullptr;
     }
-    if (origin) origin[0] = origin[1] = origin[2] = 0.0;
     Mesh mesh;
     MeshLoadReport report;
     if (Status s = load_mesh(path, mesh, &report, MeshLoadOptions{.recentre = origin != nullptr}); !s.ok()) {
@@ -126,6 +126,7 @@ GWNRTMesh load_and_build(const char* function, const char* path, double* origin)
       return nullptr;
     }
     GWNRTMesh built = build(std::move(mesh), path);
+    if (!built) set_error(gwnrtGetLastError() + recentred_note(report.origin));
     if (built && origin) {
       origin[0] = report.origin.x;
       origin[1] = report.origin.y;

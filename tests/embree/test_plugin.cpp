@@ -1395,6 +1395,9 @@ TEST(EmbreePlugin, FarOffScanLoadsRecentred) {
   EXPECT_LT(glm::length(shift), diag);  // the origin is the box's centre, rounded
   EXPECT_EQ(gwnrtLoadMeshRecentred(far_path.c_str(), nullptr), nullptr);
   EXPECT_TRUE(mentions(gwnrtGetLastError(), "NULL origin")) << gwnrtGetLastError();
+  double untouched[3] = {1, 2, 3};  // a failed call leaves no stale origin behind
+  EXPECT_EQ(gwnrtLoadMeshRecentred(nullptr, untouched), nullptr);
+  EXPECT_EQ(dvec3(untouched[0], untouched[1], untouched[2]), dvec3(0.0));
 
   Device device;
   RTCScene scenes[2];

@@ -129,6 +129,8 @@ TEST(SceneChecks, Issue15Item1_BadTransformsAreRefused) {
   SceneDesc s;
   expect_accepted(instance(R"({"scale": [1, 1, 1e-3]})"));
   expect_accepted(instance(R"({"rotate": [0, 1, 0, 1e30]})"));
+  // A last row that float reads as 0 0 0 1 (as it always was read).
+  expect_accepted(instance(R"({"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,1e-50,1.0000000001]})"));
   expect_accepted(instance(R"({"rotate": [0, 1e-30, 0, 90], "translate": [1, 0, 0]})"), &s);
   ASSERT_EQ(s.gwn_objects[0].instances.size(), 2u);
   // The rotation of 90 degrees about y maps x to -z.
@@ -250,6 +252,19 @@ TEST(SceneChecks, FarOffMeshesArePlacedInDouble) {
     worst = std::max(worst, glm::length(far_world - near_world));
   }
   EXPECT_LE(worst, tolerance);
+  // A scene of the scan with a camera at UTM is moved about its centre, camera and all; the
+  // unused vertex at the file's 0 does not count (it would keep the scene where float steps by
+  // 0.5).
+  const auto utm_point = [](double x, double y, double z) {
+    return "[" + test::num(test::kUtm[0] + x) + ", " + test::num(test::kUtm[1] + y) + ", " +
+           test::num(test::kUtm[2] + z) + "]";
+  };
+  SceneDesc site;
+  expect_accepted(R"({"gwn_objects": [{"file": ")" + with_unused + R"("}], "camera": {"eye": )" + utm_point(0, 1, 3) +
+                      R"(, "target": )" + utm_point(0, 0, 0) + "}}",
+                  &site);
+  EXPECT_NE(site.origin, dvec3(0.0));
+  EXPECT_LT(glm::length(dvec3(site.camera.eye)), 10.0);
   std::remove(utm.c_str());
   std::remove(with_unused.c_str());
 }

@@ -95,6 +95,11 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
 
 }  // namespace
 
+std::string recentred_note(const dvec3& origin) {
+  if (origin == dvec3(0.0)) return "";
+  return cat(" (coordinates relative to (", origin.x, ", ", origin.y, ", ", origin.z, "), the mesh being recentred)");
+}
+
 dvec3 recentring_origin(const dvec3& lo, const dvec3& hi, double max_coordinate) {
   const dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
   const double largest = std::max({far.x, far.y, far.z});

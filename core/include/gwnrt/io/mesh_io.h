@@ -53,6 +53,11 @@ struct MeshLoadOptions {
 // on a whole scene.
 dvec3 recentring_origin(const dvec3& lo, const dvec3& hi, double max_coordinate);
 
+// What to add to a message that names coordinates of a mesh loaded with `origin` subtracted (a
+// build's refusal): " (coordinates relative to (x, y, z), the mesh being recentred)", or "" for
+// a zero origin.
+std::string recentred_note(const dvec3& origin);
+
 // Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
 // into triangles. Texture coordinates (OBJ vt; PLY u v, s t, texture_u texture_v, texture_s
 // texture_t per vertex, or a face texcoord list) and vertex colours (OBJ v x y z r g b; PLY red
