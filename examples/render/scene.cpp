@@ -353,10 +353,19 @@ glm::dmat4 transform(const json& j, const std::string& where) {
 struct Placement {
   glm::dmat4 transform{1.0};  // the file's transform, or the identity
   dvec3 origin{0.0};          // the mesh's MeshLoadReport::origin
-  bool transformed = false;   // the file gave a transform
   // Object (the mesh as loaded) to the file's world.
   glm::dmat4 world_from_object() const { return glm::translate(transform, origin); }
 };
+
+// The box of what `m` draws, its triangles' corners, placed by `t`: a vertex no triangle uses (a
+// stray point in a scan, or the file's origin) would move a camera or a scene's origin away from
+// the mesh. Invalid for a mesh without triangles.
+Box drawn_box(const Mesh& m, const glm::dmat4& t = glm::dmat4(1.0)) {
+  Box box;
+  for (const uvec3& tri : m.triangles)
+    for (int k = 0; k < 3; ++k) box.extend(dvec3(t * glm::dvec4(dvec3(m.positions[tri[k]]), 1.0)));
+  return box;
+}
 
 // The float transform Embree gets for an instance: its placement moved by -scene_origin.
 glm::mat4 instance_transform(const Placement& p, const dvec3& scene_origin, const std::string& where) {
@@ -407,7 +416,7 @@ Material material(const json& j, const std::string& where) {
 }
 
 // A mesh file of the scene, recentred when far from the origin for its size: the file's
-// coordinates are then positions + origin, in double (see placed()); origin is 0 otherwise.
+// coordinates are then positions + origin, in double (see Placement); origin is 0 otherwise.
 Mesh read_mesh(const json& file, const std::filesystem::path& base, const std::string& where, SceneDesc& scene,
                dvec3& origin) {
   if (!file.is_string()) fail(where, std::string("expected a file name, got ") + file.type_name());
@@ -426,7 +435,7 @@ Mesh read_mesh(const json& file, const std::filesystem::path& base, const std::s
 // scene_origin: in double when either origin is nonzero; in float otherwise, as before.
 void apply(const Placement& placement, const dvec3& scene_origin, Mesh& m) {
   if (placement.origin == dvec3(0.0) && scene_origin == dvec3(0.0)) {
-    if (!placement.transformed) return;
+    if (placement.transform == glm::dmat4(1.0)) return;
     const glm::mat4 tf(placement.transform);
     for (vec3& p : m.positions) p = vec3(tf * glm::vec4(p, 1.0f));
     return;
@@ -649,10 +658,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     } else {
       fail(w, "expected \"file\" or \"plane\"");
     }
-    if (const json* t = member(e, "transform")) {
-      placement.transform = transform(*t, at(w, "transform"));
-      placement.transformed = true;
-    }
+    if (const json* t = member(e, "transform")) placement.transform = transform(*t, at(w, "transform"));
     mesh_placements.push_back(placement);
     d.material = member(e, "material") ? material_index(e["material"], at(w, "material"), s) : 0;
     s.meshes.push_back(std::move(d));
@@ -669,7 +675,7 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
     std::vector<Placement> placements;
     std::vector<std::string> instance_where_list;
     const auto place = [&](const glm::dmat4& t, const std::string& instance_where) {
-      placements.push_back({t, origin, true});
+      placements.push_back({t, origin});
       instance_where_list.push_back(instance_where);
     };
     d.source = file->get<std::string>();
@@ -718,19 +724,13 @@ void read_scene(const json& j, const std::filesystem::path& base, SceneDesc& s) 
   // moved about its own centre, as a mesh is when loaded, or float's step there (0.25 at 4e6)
   // shows in the image. Only for its size: a scene beyond the coordinate limit that is as large
   // as its distance from the origin is refused (check_geometry), moved or not.
-  // What is drawn counts, the triangles' corners, as for a mesh: a stray unused vertex (at the
-  // file's 0, say) would keep a far-off scene from moving.
-  const auto drawn_box = [](const Mesh& m, const glm::dmat4& t) {
-    Box box;
-    for (const uvec3& tri : m.triangles)
-      for (int k = 0; k < 3; ++k) box.extend(dvec3(t * glm::dvec4(dvec3(m.positions[tri[k]]), 1.0)));
-    return box;
-  };
+  // What is drawn counts (drawn_box): a stray unused vertex (at the file's 0, say) would keep a
+  // far-off scene from moving.
   Box world;
   for (size_t i = 0; i < s.meshes.size(); ++i)
     world.extend(drawn_box(s.meshes[i].mesh, mesh_placements[i].world_from_object()));
   for (size_t i = 0; i < s.gwn_objects.size(); ++i) {
-    const Box object = drawn_box(s.gwn_objects[i].mesh, glm::dmat4(1.0));
+    const Box object = drawn_box(s.gwn_objects[i].mesh);
     if (!object.valid()) continue;  // no triangles: the plugin refuses the mesh, naming it
     for (const Placement& placement : instance_placements[i]) {
       const glm::dmat4 t = placement.world_from_object();
@@ -846,11 +846,7 @@ Status default_scene(const std::string& mesh_path, SceneDesc& out) {
     if (object.mesh.positions.empty()) return {StatusCode::kInvalidMesh, mesh_path + ": the mesh has no vertices"};
     // The framing in double, whatever the mesh's units: the float of a tiny mesh's squared
     // extent would underflow (and a huge one's overflow), which check_geometry then reports.
-    // The box of what is drawn, the triangles' corners: an unused vertex (a stray point in a
-    // scan, or the file's origin) would otherwise move the camera away from the mesh.
-    Box box;
-    for (const uvec3& t : object.mesh.triangles)
-      for (int k = 0; k < 3; ++k) box.extend(dvec3(object.mesh.positions[t[k]]));
+    Box box = drawn_box(object.mesh);
     if (!box.valid())  // no triangles: the plugin refuses the mesh, saying so
       for (const vec3& p : object.mesh.positions) box.extend(dvec3(p));
     const dvec3 extent = box.hi - box.lo;

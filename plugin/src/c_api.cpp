@@ -45,12 +45,13 @@ T guard_c_api(const char* where, T failed, Fn&& body) noexcept {
   return result;
 }
 
-GWNRTMesh build(Mesh mesh, const std::string& source) {
+// `note` follows a refusal's message (recentred_note for a recentred mesh).
+GWNRTMesh build(Mesh mesh, const std::string& source, const std::string& note = "") {
   auto out = std::make_unique<GWNRTMeshTy>();
   BuildOptions build;
   build.classify_sheets = false;  // only traced: no signed distances
   if (Status s = GwnModel::build(std::move(mesh), out->model, build); !s.ok()) {
-    set_error(source + ": " + s.message());
+    set_error(source + ": " + s.message() + note);
     return nullptr;
   }
   out->view = out->model.view();
@@ -125,8 +126,7 @@ GWNRTMesh load_and_build(const char* function, const char* path, double* origin)
       set_error(s.message());
       return nullptr;
     }
-    GWNRTMesh built = build(std::move(mesh), path);
-    if (!built) set_error(gwnrtGetLastError() + recentred_note(report.origin));
+    GWNRTMesh built = build(std::move(mesh), path, recentred_note(report.origin));
     if (built && origin) {
       origin[0] = report.origin.x;
       origin[1] = report.origin.y;
