@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "gwnrt/geometry/model.h"
 #include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::examples {
@@ -25,10 +26,7 @@ inline void set_trace_surface(const std::string& mode, std::optional<double> lev
 inline std::optional<std::string> level_out_of_reach(uint32_t triangle_count, const TraceOptions& options) {
   if (options.mode != TraceMode::kWindingNumber || level_within_reach(triangle_count, options.level))
     return std::nullopt;
-  char text[160];
-  std::snprintf(text, sizeof text, "level %g lies outside every value w takes on this mesh (|w| < %u/2): S is empty",
-                double(options.level), triangle_count);
-  return std::string(text);
+  return level_out_of_reach_message(triangle_count, options.level);
 }
 
 // Printed by the programs that trace, for the model they trace.

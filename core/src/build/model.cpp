@@ -2,6 +2,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <mutex>
 #include <string>
@@ -75,6 +76,13 @@ std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vect
 }
 
 }  // namespace
+
+std::string level_out_of_reach_message(uint32_t triangle_count, float level) {
+  char text[48];  // %g: "100000" where the shortest round trip says "1e+05"
+  std::snprintf(text, sizeof text, "%g", double(level));
+  return cat("level ", std::string_view(text), " lies outside every value w takes on this mesh (|w| < ", triangle_count,
+             "/2): S is empty");
+}
 
 Status check_mesh_scale(const Mesh& mesh) {
   float largest = 0.0f;

@@ -88,9 +88,7 @@ Status plan_meshing(const GwnModel& model, const MeshingOptions& options, Meshin
   if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
   plan.view = model.view();
   if (!level_within_reach(plan.view, options.level)) {
-    stats.message = "level " + std::to_string(options.level) +
-                    " lies outside every value w takes on this mesh (|w| < " +
-                    std::to_string(plan.view.triangles.triangle_count) + "/2): S is empty (an empty mesh)";
+    stats.message = level_out_of_reach_message(plan.view.triangles.triangle_count, options.level) + " (an empty mesh)";
     plan.empty = true;
     return Status::Ok();
   }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "gwnrt/field/evaluate_winding.h"
@@ -40,6 +41,10 @@ inline constexpr float kMinMeshExtent = 1e-8f;
 // right case; about 840 float steps across the box).
 inline constexpr float kMinMeshExtentPerCoordinate = 1e-4f;
 Status check_mesh_scale(const Mesh& mesh);
+
+// Why a level w never reaches (level_within_reach is false) has no surface on a mesh of
+// `triangle_count` triangles, in the words every program and the mesher use.
+std::string level_out_of_reach_message(uint32_t triangle_count, float level);
 
 struct BuildOptions {
   uint32_t max_leaf_triangles = 4;

@@ -159,11 +159,11 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   using U32 = typename Backend::template Array<uint32_t>;
   detail::PassClock clock;
   detail::MemoryBudget budget(grid, options.memory_budget, stats);
-  // The block map (step 2) has one entry a block of the grid, known now: a grid whose map alone
-  // is beyond the budget is refused before scouting, which at --resolution 100000 ran past a
-  // minute and 3 GB before the refusal.
+  // The block map (step 2: needed_dense, is_slot and slot_of_block) has three words a block of
+  // the grid, known now: a grid whose map alone is beyond the budget is refused before scouting,
+  // which at --resolution 100000 ran past a minute and 3 GB before the refusal.
   const uint64_t block_count = grid.block_count();
-  if (Status s = budget.reserve(block_count * 8, "the block map"); !s.ok()) return s;
+  if (Status s = budget.reserve(block_count * 3 * sizeof(uint32_t), "the block map"); !s.ok()) return s;
 
   // 1. Scouting, coarse to fine: a block of 2^L·kBlockCells cells is split only when S may meet it.
   const int32_t corners_max = std::max({grid.cells[0], grid.cells[1], grid.cells[2]}) + 1;
