@@ -361,7 +361,7 @@ int main(int argc, char** argv) try {
       ->capture_default_str();
   app.add_flag("--no-self-intersections", no_self, "skip the self-intersection count (slow on big outputs)");
   app.add_option("--json", json_path, "also write every row and the model build times to this JSON file");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = examples::parse_command_line(app, argc, argv)) return *status;
   settings.self_intersections = !no_self;
   {
     // The distance measurements' arrays per sample (mesh_quality.h): a point on the output and its

@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
                      "--baseline-json gives GPU over CPU)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = examples::parse_command_line(app, argc, argv)) return *status;
   bool use_cuda = false;
   if (Status s = examples::choose_device(kProgram, device, use_cuda); !s.ok())
     return examples::fail(kProgram, s.message());

@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
                  "disagree or (b) is capped, hits a smooth piece or takes Harnack steps")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--show", show, "disagreeing rays printed per comparison")->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = examples::parse_command_line(app, argc, argv)) return *status;
   if (Status s = validate_trace_options(options); !s.ok()) examples::die(kProgram, s.message());
   // Checked before allocating, against the arrays each pixel has: its ray, the hits of (a) and (b),
   // and at most one entry in the check's groups and the step statistics. (Issue 15: 100000 x 100000

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -14,6 +15,19 @@
 #include "gwnrt/trace/trace_types.h"
 
 namespace gwnrt::examples {
+
+// Parses the command line: nothing when it was accepted, else the exit status, after CLI11 has
+// said what it refused (or printed --help or --version, status 0). A refusal exits with `status`,
+// not CLI11's own codes (101-115 by the kind of mistake), which no program documents and which
+// differed from the status its own checks of the same input give.
+inline std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv, int status = 1) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : status;
+  }
+  return std::nullopt;
+}
 
 // A number (the whole text) for which ok(v) holds; else "must be <wanted>, got '<text>'".
 template <class Ok>

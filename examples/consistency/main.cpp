@@ -48,6 +48,16 @@ using examples::seconds_since;
 constexpr const char* kProgram = "gwnrt-consistency";
 constexpr double kMinAgreement = 0.999;  // items within tolerance, per quantity
 
+// Exit statuses: 0 consistent, kExitInconsistent, kExitNoGpu, kExitError. An error (a flag, a file
+// that cannot be read or written) has its own, so that a script tells a disagreement between the
+// backends from a mistyped path.
+constexpr int kExitInconsistent = 1, kExitNoGpu = 2, kExitError = 3;
+
+int error(const std::string& message) {
+  (void)examples::fail(kProgram, message);
+  return kExitError;
+}
+
 // The three things a backend does, bound to its model.
 struct Backend {
   std::string name;
@@ -390,21 +400,21 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"cuda", "cpu"}));
   app.add_option("--json", json_path, "Also write every row to this JSON file");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = examples::parse_command_line(app, argc, argv, kExitError)) return *status;
 
   if (against == "cuda") {
 #if defined(GWNRT_HAVE_CUDA)
     std::string why;
     if (!cuda::device_available(&why)) {
       std::fprintf(stderr, "%s: no usable GPU, nothing to compare: %s\n", kProgram, why.c_str());
-      return 2;
+      return kExitNoGpu;
     }
 #else
     std::fprintf(stderr,
                  "%s: no usable GPU, nothing to compare: this %s was built without the CUDA backend (reconfigure with "
                  "-DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)\n",
                  kProgram, kProgram);
-    return 2;
+    return kExitNoGpu;
 #endif
   }
   if (meshes.empty())
@@ -416,16 +426,12 @@ int main(int argc, char** argv) {
   // Read once (standard input cannot be read again), parsed again for a recentred mesh.
   std::string points_text, points_source, rays_text, rays_source;
   if (!points_path.empty()) {
-    if (Status s = examples::read_text(points_path, points_text, points_source); !s.ok())
-      return examples::fail(kProgram, s.message());
-    if (Status s = examples::parse_points(points_text, points_source, given_points); !s.ok())
-      return examples::fail(kProgram, s.message());
+    if (Status s = examples::read_text(points_path, points_text, points_source); !s.ok()) return error(s.message());
+    if (Status s = examples::parse_points(points_text, points_source, given_points); !s.ok()) return error(s.message());
   }
   if (!rays_path.empty()) {
-    if (Status s = examples::read_text(rays_path, rays_text, rays_source); !s.ok())
-      return examples::fail(kProgram, s.message());
-    if (Status s = examples::parse_rays(rays_text, rays_source, given_rays); !s.ok())
-      return examples::fail(kProgram, s.message());
+    if (Status s = examples::read_text(rays_path, rays_text, rays_source); !s.ok()) return error(s.message());
+    if (Status s = examples::parse_rays(rays_text, rays_source, given_rays); !s.ok()) return error(s.message());
   }
 
   std::vector<Row> rows;
@@ -435,18 +441,18 @@ int main(int argc, char** argv) {
     // Recentred when far off, as the other programs do; given points and rays are then read
     // again, moved by the mesh's origin (both backends answer about the same moved model).
     if (Status s = examples::load_model(path, model, loaded, {}, MeshLoadOptions{.recentre = true}); !s.ok())
-      return examples::fail(kProgram, s.message());
+      return error(s.message());
     examples::print_load_warnings(kProgram, path, loaded.report, false);
     const dvec3 origin = loaded.report.origin;
     std::vector<vec3> moved_points;
     std::vector<Ray> moved_rays;
     if (origin != dvec3(0.0) && !points_path.empty()) {
       if (Status s = examples::parse_points(points_text, points_source, moved_points, origin); !s.ok())
-        return examples::fail(kProgram, s.message());
+        return error(s.message());
     }
     if (origin != dvec3(0.0) && !rays_path.empty()) {
       if (Status s = examples::parse_rays(rays_text, rays_source, moved_rays, origin); !s.ok())
-        return examples::fail(kProgram, s.message());
+        return error(s.message());
     }
     const std::vector<vec3>& points = origin != dvec3(0.0) ? moved_points : given_points;
     const std::vector<Ray>& rays = origin != dvec3(0.0) ? moved_rays : given_rays;
@@ -455,8 +461,7 @@ int main(int argc, char** argv) {
 #if defined(GWNRT_HAVE_CUDA)
     cuda::DeviceModel device;
     if (against == "cuda") {
-      if (Status s = cuda::DeviceModel::upload(model, device); !s.ok())
-        return examples::fail(kProgram, path + ": " + s.message());
+      if (Status s = cuda::DeviceModel::upload(model, device); !s.ok()) return error(path + ": " + s.message());
       other = {"cuda",
                [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
                  return cuda::evaluate_points(device, p, q, r);
@@ -477,7 +482,7 @@ int main(int argc, char** argv) {
             compare_mesh(path, cpu, other, points_path.empty() ? nullptr : &points, rays_path.empty() ? nullptr : &rays,
                          count, resolution, image_width, image_height, model, rows);
         !s.ok())
-      return examples::fail(kProgram, s.message());
+      return error(s.message());
   }
 
   const std::string second = against == "cuda" ? "gpu" : "cpu again";
@@ -513,7 +518,7 @@ int main(int argc, char** argv) {
     std::ofstream file(json_path);
     file << doc.dump(2) << "\n";
     file.flush();
-    if (!file) return examples::fail(kProgram, json_path + ": cannot write");
+    if (!file) return error(json_path + ": cannot write");
   }
-  return all_pass ? 0 : 1;
+  return all_pass ? 0 : kExitInconsistent;
 }

@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
                "Print a quality report: topology, self-intersections, distances to S, time per pass, memory");
   app.add_option("--report-json", report_json_path, "Write the quality report as JSON to this file");
   app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = gwnrt::examples::parse_command_line(app, argc, argv)) return *status;
   const bool chatty = verbose || ::isatty(2) == 1;
 
   if (resolution) options.resolution = *resolution;

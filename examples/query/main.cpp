@@ -234,7 +234,7 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose,
                "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = gwnrt::examples::parse_command_line(app, argc, argv)) return *status;
 
   uint32_t fields = 0;
   std::vector<bool> selected(std::size(kFields), false);

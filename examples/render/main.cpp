@@ -193,11 +193,7 @@ int main(int argc, char** argv) {
   app.failure_message([](const CLI::App*, const CLI::Error& e) {
     return std::string(kProgram) + ": " + e.what() + "\nRun with --help for more information.\n";
   });
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 1;  // --help is a ParseError too, and succeeds
-  }
+  if (const auto status = gwnrt::examples::parse_command_line(app, argc, argv)) return *status;
 
   // Everything the user typed is checked before the mesh is loaded and built.
   if (width < 1 || width > kMaxImageSide || height < 1 || height > kMaxImageSide) {

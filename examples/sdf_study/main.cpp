@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--brute-points", brute_points, "points whose sheet distance is checked by brute force")
       ->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = examples::parse_command_line(app, argc, argv)) return *status;
   {
     // Checked before the mesh is loaded, against the arrays each sample point has (its point and
     // base, reference, float copy, five query kinds' results over it and over the mix, Newton's

@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::examples::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto status = gwnrt::examples::parse_command_line(app, argc, argv)) return *status;
 
   gwnrt::examples::set_trace_surface(mode, level, options);
   if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(kProgram, s.message());
