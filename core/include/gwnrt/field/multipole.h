@@ -118,6 +118,28 @@ struct FarFieldTerms : FarFieldOmega<Order, T> {
   }
 };
 
+// ∇_d Ω of one cluster from its terms (∇ₓ Ω is its negative): ρ³ times (along_u · u + rest),
+// each an order-nested sum in ρ as FarFieldOmega's. T is float or a lane vector (the host's far
+// lanes, winding_number.h); n and e are the cluster's moments as in Moments.
+template <int Order, class T>
+GWNRT_HD GWNRT_FORCEINLINE void far_field_gradient(const FarFieldTerms<Order, T>& t, const T* n, const T* e, T g[3]) {
+  const T rho = t.inv_r;
+  const T u[3] = {t.ux, t.uy, t.uz};
+  T along_u{};
+  T rest[3] = {};
+  if constexpr (Order >= 2) {
+    along_u = (-52.5f * t.c3 + 7.5f * t.e_dot_u) * rho;
+    for (int k = 0; k < 3; ++k) rest[k] = (t.qu[k] * 22.5f - e[k] * 1.5f) * rho;
+  }
+  if constexpr (Order >= 1) {
+    along_u = (-3.0f * t.half_trace_s + 7.5f * t.usu + along_u) * rho;
+    for (int k = 0; k < 3; ++k) rest[k] = (rest[k] - t.su[k] * 3.0f) * rho;
+  }
+  along_u += -3.0f * t.n_dot_u;
+  const T rho3 = rho * t.inv_r2;
+  for (int k = 0; k < 3; ++k) g[k] = (u[k] * along_u + (rest[k] + n[k])) * rho3;
+}
+
 // Adds the far-field contribution of one cluster at offset d = p̄ - x. The derivatives of the
 // forms in d (Ω₀ = N·d/r³, ...), rewritten in u and ρ as FarFieldOmega is: ∇_d Ω and H_d Ω are
 // ρ³ and ρ⁴ times (order 0 + ρ·(order 1 + ρ·order 2)).
@@ -126,67 +148,51 @@ GWNRT_HD GWNRT_FORCEINLINE void add_far_field(const float* n, const float* s, co
                                               const vec3& d, FieldAccumulator<float>& acc) {
   const FarFieldTerms<Order, float> t(n, s, p, e, d.x, d.y, d.z);
   acc.omega += t.omega;
-  if constexpr (WantGradient || WantHessian) {
+  if constexpr (WantGradient) {
+    float g[3];
+    far_field_gradient(t, n, e, g);
+    acc.gradient -= vec3(g[0], g[1], g[2]);  // ∇ₓ = -∇_d
+  }
+  if constexpr (WantHessian) {
     const float rho = t.inv_r, n_dot_u = t.n_dot_u, half_trace_s = t.half_trace_s, usu = t.usu, c3 = t.c3,
                 e_dot_u = t.e_dot_u;
     const vec3 u(t.ux, t.uy, t.uz), N(n[0], n[1], n[2]), su(t.su[0], t.su[1], t.su[2]), qu(t.qu[0], t.qu[1], t.qu[2]);
     vec3 E(0.0f);
     if constexpr (Order >= 2) E = vec3(e[0], e[1], e[2]);
     const Sym3<float> q{t.q[0], t.q[1], t.q[2], t.q[3], t.q[4], t.q[5]};
-
-    if constexpr (WantGradient) {
-      // ∇_d Ω = (along_u)·u + rest, each an order-nested sum.
-      float along_u = 0.0f;
-      vec3 rest(0.0f);
-      if constexpr (Order >= 2) {
-        along_u = (-52.5f * c3 + 7.5f * e_dot_u) * rho;
-        rest = (qu * 22.5f - E * 1.5f) * rho;
-      }
-      if constexpr (Order >= 1) {
-        along_u = (-3.0f * half_trace_s + 7.5f * usu + along_u) * rho;
-        rest = (rest - su * 3.0f) * rho;
-      }
-      along_u += -3.0f * n_dot_u;
-      rest += N;
-      const float rho3 = rho * t.inv_r2;
-      acc.gradient -= (u * along_u + rest) * rho3;  // ∇ₓ = -∇_d
+    // H_d Ω = a I + b u uᵀ + (v uᵀ + u vᵀ) + M.
+    float a = 0.0f, b = 0.0f;
+    vec3 v(0.0f);
+    Sym3<float> m;
+    if constexpr (Order >= 2) {
+      a = (-52.5f * c3 + 7.5f * e_dot_u) * rho;
+      b = (472.5f * c3 - 52.5f * e_dot_u) * rho;
+      v = (qu * -157.5f + E * 7.5f) * rho;
+      m = q * (45.0f * rho);
     }
-
-    if constexpr (WantHessian) {
-      // H_d Ω = a I + b u uᵀ + (v uᵀ + u vᵀ) + M.
-      float a = 0.0f, b = 0.0f;
-      vec3 v(0.0f);
-      Sym3<float> m;
-      if constexpr (Order >= 2) {
-        a = (-52.5f * c3 + 7.5f * e_dot_u) * rho;
-        b = (472.5f * c3 - 52.5f * e_dot_u) * rho;
-        v = (qu * -157.5f + E * 7.5f) * rho;
-        m = q * (45.0f * rho);
-      }
-      if constexpr (Order >= 1) {
-        a = (-3.0f * half_trace_s + 7.5f * usu + a) * rho;
-        b = (15.0f * half_trace_s - 52.5f * usu + b) * rho;
-        v = (su * 15.0f + v) * rho;
-        Sym3<float> order1 = Sym3<float>{s[0], s[1], s[2], s[3], s[4], s[5]} * -3.0f;
-        order1 += m;
-        m = order1 * rho;
-      }
-      a += -3.0f * n_dot_u;
-      b += 15.0f * n_dot_u;
-      v += N * -3.0f;
-      const float rho4 = t.inv_r2 * t.inv_r2;
-      a *= rho4;
-      b *= rho4;
-      v *= rho4;
-      m = m * rho4;
-      Sym3<float>& h = acc.hessian;
-      h.xx += a + b * u.x * u.x + 2.0f * v.x * u.x + m.xx;
-      h.yy += a + b * u.y * u.y + 2.0f * v.y * u.y + m.yy;
-      h.zz += a + b * u.z * u.z + 2.0f * v.z * u.z + m.zz;
-      h.xy += b * u.x * u.y + v.x * u.y + u.x * v.y + m.xy;
-      h.xz += b * u.x * u.z + v.x * u.z + u.x * v.z + m.xz;
-      h.yz += b * u.y * u.z + v.y * u.z + u.y * v.z + m.yz;
+    if constexpr (Order >= 1) {
+      a = (-3.0f * half_trace_s + 7.5f * usu + a) * rho;
+      b = (15.0f * half_trace_s - 52.5f * usu + b) * rho;
+      v = (su * 15.0f + v) * rho;
+      Sym3<float> order1 = Sym3<float>{s[0], s[1], s[2], s[3], s[4], s[5]} * -3.0f;
+      order1 += m;
+      m = order1 * rho;
     }
+    a += -3.0f * n_dot_u;
+    b += 15.0f * n_dot_u;
+    v += N * -3.0f;
+    const float rho4 = t.inv_r2 * t.inv_r2;
+    a *= rho4;
+    b *= rho4;
+    v *= rho4;
+    m = m * rho4;
+    Sym3<float>& h = acc.hessian;
+    h.xx += a + b * u.x * u.x + 2.0f * v.x * u.x + m.xx;
+    h.yy += a + b * u.y * u.y + 2.0f * v.y * u.y + m.yy;
+    h.zz += a + b * u.z * u.z + 2.0f * v.z * u.z + m.zz;
+    h.xy += b * u.x * u.y + v.x * u.y + u.x * v.y + m.xy;
+    h.xz += b * u.x * u.z + v.x * u.z + u.x * v.z + m.xz;
+    h.yz += b * u.y * u.z + v.y * u.z + u.y * v.z + m.yz;
   }
 }
 

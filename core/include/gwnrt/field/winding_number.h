@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <type_traits>
 
 #include "gwnrt/field/lanes.h"
 #include "gwnrt/field/multipole.h"
@@ -389,16 +390,33 @@ struct PendingTriangles {
 // The far lanes' expansion of one node (f4) or of two (f8, lanes 0-3 the first node's):
 // lanes(field) loads field(node) of each node as one lane vector.
 template <int Order, class V, class Lanes>
-GWNRT_FORCEINLINE V expand_far_lanes(const TriangleTreeView& tree, Lanes lanes, V dx, V dy, V dz) {
+struct FarLaneMoments {
   V n[3], s[6], p[10], e[3];
-  for (int k = 0; k < 3; ++k) n[k] = lanes([&](uint32_t i) { return tree.expansion[i].n[k]; });
-  if constexpr (Order >= 1)
-    for (int k = 0; k < 6; ++k) s[k] = lanes([&](uint32_t i) { return tree.order1[i].s[k]; });
-  if constexpr (Order >= 2) {
-    for (int k = 0; k < 10; ++k) p[k] = lanes([&](uint32_t i) { return tree.order2[i].p[k]; });
-    for (int k = 0; k < 3; ++k) e[k] = lanes([&](uint32_t i) { return tree.order2[i].e[k]; });
+  GWNRT_FORCEINLINE FarLaneMoments(const TriangleTreeView& tree, Lanes lanes) {
+    for (int k = 0; k < 3; ++k) n[k] = lanes([&](uint32_t i) { return tree.expansion[i].n[k]; });
+    if constexpr (Order >= 1)
+      for (int k = 0; k < 6; ++k) s[k] = lanes([&](uint32_t i) { return tree.order1[i].s[k]; });
+    if constexpr (Order >= 2) {
+      for (int k = 0; k < 10; ++k) p[k] = lanes([&](uint32_t i) { return tree.order2[i].p[k]; });
+      for (int k = 0; k < 3; ++k) e[k] = lanes([&](uint32_t i) { return tree.order2[i].e[k]; });
+    }
   }
-  return FarFieldOmega<Order, V>(n, s, p, e, dx, dy, dz).omega;
+};
+template <int Order, class V, class Lanes>
+GWNRT_FORCEINLINE V expand_far_lanes(const TriangleTreeView& tree, Lanes lanes, V dx, V dy, V dz) {
+  const FarLaneMoments<Order, V, Lanes> m(tree, lanes);
+  return FarFieldOmega<Order, V>(m.n, m.s, m.p, m.e, dx, dy, dz).omega;
+}
+// The far lanes' Ω and ∇ₓΩ, added to omega and gradient where mask holds.
+template <int Order, class V, class M, class Lanes>
+GWNRT_FORCEINLINE void add_far_lanes_with_gradient(const TriangleTreeView& tree, Lanes lanes, M mask, V dx, V dy, V dz,
+                                                   V& omega, V gradient[3]) {
+  const FarLaneMoments<Order, V, Lanes> m(tree, lanes);
+  const FarFieldTerms<Order, V> t(m.n, m.s, m.p, m.e, dx, dy, dz);
+  omega += lane_select(mask, t.omega, V{});
+  V g[3];
+  far_field_gradient(t, m.n, m.e, g);
+  for (int k = 0; k < 3; ++k) gradient[k] -= lane_select(mask, g[k], V{});  // ∇ₓ = -∇_d
 }
 template <int Order>
 GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node, f4 dx, f4 dy, f4 dz) {
@@ -406,29 +424,54 @@ GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node
       tree, [&](auto field) { return load4(field(node)); }, dx, dy, dz);
 }
 
-// w alone on the host: a node's far lanes expanded together (one f4 expansion per node), and the
-// near triangles kNearWidth at a time with a vector atan2 (lanes.h): the scalar atan2f alone
-// was 35% of the lane-by-lane time on bunny_holes. ∇w and H_w keep the scalar visitor.
-template <int Order>
+// w (and ∇w) on the host: a node's far lanes expanded together (one f4 expansion per node), and
+// the near triangles kNearWidth at a time with a vector atan2 (lanes.h): the scalar atan2f alone
+// was 35% of the lane-by-lane time on bunny_holes. ∇w comes from the same far lanes and, for
+// each near triangle, from its edges in float, or in double where its lane found float
+// ill-conditioned, as the scalar visitor decides. H_w keeps the scalar visitor.
+template <int Order, bool WantGradient = false>
 struct TaylorLanesSum {
   const TriangleTreeView& tree;
   const vec3 x;
   f4 far_omega{};
   fnear near_omega{};
   PendingTriangles<kNearWidth> pending{};
+  // ∇Ω's sums, only when asked: with them always there (zeroed, unused), w alone ran 12% slower
+  // (bunny, 2 cores: 2.2 -> 1.9 M/s).
+  struct GradientSums {
+    f4 far[3] = {};
+#if defined(__AVX2__)
+    f8 far8[3] = {};  // of node pairs
+#endif
+    vec3 near{0.0f};
+  };
+  struct NoGradient {};
+  [[no_unique_address]] std::conditional_t<WantGradient, GradientSums, NoGradient> gradient_sums{};
 
 #if defined(__AVX2__)
   f8 far_omega8{};  // lanes of node pairs (LaneTraversal::step_pair)
   GWNRT_FORCEINLINE void far_lane_pair(uint32_t a, uint32_t b, i8 mask, f8 dx, f8 dy, f8 dz) {
     const auto lanes = [&](auto field) { return load8(field(a), field(b)); };
-    far_omega8 += lane_select(mask, expand_far_lanes<Order>(tree, lanes, dx, dy, dz), f8{});
+    if constexpr (WantGradient)
+      add_far_lanes_with_gradient<Order>(tree, lanes, mask, dx, dy, dz, far_omega8, gradient_sums.far8);
+    else
+      far_omega8 += lane_select(mask, expand_far_lanes<Order>(tree, lanes, dx, dy, dz), f8{});
   }
 #endif
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
-    far_omega += lane_select(mask, far_lanes_omega<Order>(tree, node, dx, dy, dz), f4{});
+    if constexpr (WantGradient) {
+      const auto lanes = [&](auto field) { return load4(field(node)); };
+      add_far_lanes_with_gradient<Order>(tree, lanes, mask, dx, dy, dz, far_omega, gradient_sums.far);
+    } else {
+      far_omega += lane_select(mask, far_lanes_omega<Order>(tree, node, dx, dy, dz), f4{});
+    }
   }
   GWNRT_FORCEINLINE void near(uint32_t, const vec3& p0, const vec3& p1, const vec3& p2) {
     if (pending.push(p0, p1, p2)) flush();
+  }
+  // Corner j of the pending triangle in lane l.
+  GWNRT_FORCEINLINE vec3 corner(int l, int j) const {
+    return vec3(pending.corners[3 * j][l], pending.corners[3 * j + 1][l], pending.corners[3 * j + 2][l]);
   }
   GWNRT_FORCEINLINE void flush() {
     fnear g[3][3];
@@ -442,11 +485,15 @@ struct TaylorLanesSum {
                          ((1u << pending.count) - 1u);
     for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
       const int l = lowest_set_bit(rest);
-      const auto corner = [&](int j) {
-        return dvec3(pending.corners[3 * j][l], pending.corners[3 * j + 1][l], pending.corners[3 * j + 2][l]);
-      };
-      omega[l] = float(triangle_solid_angle(corner(0), corner(1), corner(2), dvec3(x), tree.mean_on_triangles));
+      const dvec3 p0(corner(l, 0)), p1(corner(l, 1)), p2(corner(l, 2));
+      omega[l] = float(triangle_solid_angle(p0, p1, p2, dvec3(x), tree.mean_on_triangles));
+      if constexpr (WantGradient)
+        gradient_sums.near += saturated_float(triangle_solid_angle_gradient(p0, p1, p2, dvec3(x)));
     }
+    if constexpr (WantGradient)
+      for (int l = 0; l < pending.count; ++l)
+        if (!(ill >> l & 1))
+          gradient_sums.near += triangle_solid_angle_gradient(corner(l, 0), corner(l, 1), corner(l, 2), x);
     if (pending.count < kNearWidth) {  // the unused lanes hold stale corners
       inear lane;
       for (int i = 0; i < kNearWidth; ++i) lane[i] = i;
@@ -463,6 +510,17 @@ struct TaylorLanesSum {
     return lane_sum(far_omega) + lane_sum(near_omega);
 #endif
   }
+  GWNRT_FORCEINLINE vec3 gradient() requires WantGradient {
+    if (pending.count > 0) flush();
+    vec3 sum = gradient_sums.near;
+    for (int k = 0; k < 3; ++k) {
+      sum[k] += lane_sum(gradient_sums.far[k]);
+#if defined(__AVX2__)
+      sum[k] += lane_sum(gradient_sums.far8[k]);
+#endif
+    }
+    return sum;
+  }
 };
 #endif
 
@@ -473,11 +531,12 @@ struct TaylorLanesSum {
 template <int Order, bool WantGradient, bool WantHessian>
 GWNRT_HD WindingSample winding_number_taylor(const TriangleTreeView& tree, const vec3& x, float beta) {
 #if GWNRT_HOST_LANES
-  if constexpr (!WantGradient && !WantHessian) {
-    detail::TaylorLanesSum<Order> sum{tree, x};
+  if constexpr (!WantHessian) {
+    detail::TaylorLanesSum<Order, WantGradient> sum{tree, x};
     visit_multipole(tree, x, beta, sum);
     WindingSample out;
     out.w = sum.omega() * kInv4Pi;
+    if constexpr (WantGradient) out.gradient = sum.gradient() * kInv4Pi;
     return out;
   }
 #endif
