@@ -4,14 +4,16 @@
 # --baselines adds what gwnrt-bench-mesh's OpenVDB column needs (OpenVDB, and Boost for its
 # headers): a benchmark's baseline only, left out of CI, where compiling OpenVDB's mesher into
 # each build configuration would cost minutes.
+# --ci adds ccache, with which CI's Release build and other configurations share objects.
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
           libtbb-dev libglm-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
           libembree-dev libopenimageio-dev nlohmann-json3-dev clang-format libassimp-dev
           pybind11-dev python3-dev python3-numpy python3-pytest python3-dask python3-distributed)
-if [ "${1:-}" = "--baselines" ]; then
-  packages+=(libopenvdb-dev libboost-dev libboost-iostreams-dev)
-fi
+case "${1:-}" in
+  --baselines) packages+=(libopenvdb-dev libboost-dev libboost-iostreams-dev) ;;
+  --ci) packages+=(ccache) ;;
+esac
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

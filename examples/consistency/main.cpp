@@ -54,7 +54,7 @@ constexpr double kMinAgreement = 0.999;  // items within tolerance, per quantity
 constexpr int kExitInconsistent = 1, kExitNoGpu = 2, kExitError = 3;
 
 int error(const std::string& message) {
-  (void)examples::fail(kProgram, message);
+  examples::fail(kProgram, message);
   return kExitError;
 }
 
