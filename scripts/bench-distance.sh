@@ -14,7 +14,7 @@ baseline_commit=01f2272
 rounds="${ROUNDS:-3}"
 points="${POINTS:-1000000}"
 out="${OUT:-build/bench-distance}"
-[ -x build/examples/gwnrt-bench-query ] || { echo "bench-distance: run scripts/test.sh first (it makes build/)"; exit 1; }
+[ -x build/bin/gwnrt-bench-query ] || { echo "bench-distance: run scripts/test.sh first (it makes build/)"; exit 1; }
 if [ ! -x build-baseline/build/examples/gwnrt-bench-query ]; then
   [ -d build-baseline/src ] || git worktree add --detach build-baseline/src "$baseline_commit"
   cmake -S build-baseline/src -B build-baseline/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DGWNRT_WITH_CUDA=OFF
@@ -37,7 +37,7 @@ for mesh in "${meshes[@]}"; do
            }
            END { print "]}" }' >"$base_json"
     echo "== $name, round $round"
-    build/examples/gwnrt-bench-query "$mesh" --points "$points" --brute-seconds 0.2 --only distance \
+    build/bin/gwnrt-bench-query "$mesh" --points "$points" --brute-seconds 0.2 --only distance \
       --baseline-json "$base_json" --json "$out/${name}.${round}.json" | sed -n '/^mode /,/^$/p'
   done
 done

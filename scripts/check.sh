@@ -45,7 +45,7 @@ check_tsan() {
   # TSan: docs/design.md §10). It matches frames inlined from TBB's headers, so
   # GWNRT_SANITIZE=thread adds -g whatever the build type (a Release build passes too).
   cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGWNRT_SANITIZE=thread \
-    -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_WERROR=ON
+    -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_BUILD_PROGRAMS=OFF -DGWNRT_WERROR=ON
   cmake --build build-tsan --parallel "$jobs" --target gwnrt_embree_tests gwnrt_thread_tests
   # history_size=7 (the most): a TBB worker reads a parallel_for's task_group_context on the
   # caller's stack, whose slot the caller reuses after the join TSan cannot see; with the default
@@ -96,7 +96,7 @@ check_configs() {
   cmake -S . -B build-noembree -G Ninja -DGWNRT_WITH_EMBREE=OFF -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
   cmake --build build-noembree --parallel "$jobs" --target gwnrt_tests gwnrt-bench-trace
   ctest --test-dir build-noembree --output-on-failure --parallel "$jobs" -R '^TraceWatertight'
-  cmake -S . -B build-library -G Ninja -DGWNRT_BUILD_EXAMPLES=OFF -DGWNRT_BUILD_TESTS=OFF -DGWNRT_WITH_CUDA=OFF \
+  cmake -S . -B build-library -G Ninja -DGWNRT_BUILD_PROGRAMS=OFF -DGWNRT_BUILD_TESTS=OFF -DGWNRT_WITH_CUDA=OFF \
     -DGWNRT_WITH_PYTHON=OFF \
     -DGWNRT_WERROR=ON
   cmake --build build-library --parallel "$jobs"

@@ -65,7 +65,7 @@ step configure cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DGWN
 STEP_LIMIT=420 step build cmake --build build-gpu --parallel "$(nproc)" --target gwnrt_cuda_tests \
   gwnrt-consistency gwnrt-bench-query gwnrt-mesh || exit 1
 
-bin=build-gpu/examples
+bin=build-gpu/bin
 # One process a suite: a device fault (an illegal address) is sticky and would fail every later test.
 for suite in CudaBackend CudaQueries CudaTrace CudaMeshing CudaMeshingErrors; do
   step "cuda-tests-$suite" build-gpu/tests/gwnrt_cuda_tests --gtest_filter="*$suite.*" \

@@ -9,9 +9,9 @@ cmake --build build --parallel --target gwnrt-render gwnrt-query
 mkdir -p out
 # The bunny with holes twice, path-traced in one Embree scene: left as a GWN object (its holes
 # closed by the smooth pieces of S), right as the ordinary triangle mesh (holes open).
-./build/examples/gwnrt-render data/bunny_scene.json -o out/bunny_scene.png
+./build/bin/gwnrt-render data/bunny_scene.json -o out/bunny_scene.png
 echo "wrote out/bunny_scene.png"
-./build/examples/gwnrt-query data/bunny_holes.obj --points data/bunny_probe_points.txt \
+./build/bin/gwnrt-query data/bunny_holes.obj --points data/bunny_probe_points.txt \
   --fields w,grad,udist,bdist -o out/bunny_holes_query.csv
 echo "wrote out/bunny_holes_query.csv"
 head -n 5 out/bunny_holes_query.csv

@@ -1,4 +1,4 @@
-// Running a command-line program of the examples as a subprocess, for the CLI tests.
+// Running one of gwnrt's programs as a subprocess, for the CLI tests.
 #pragma once
 
 #include <sys/wait.h>
@@ -23,14 +23,12 @@ namespace gwnrt::test {
 
 namespace fs = std::filesystem;
 
-// The test target does not know where the examples are built, so find the program next to the
-// test binary's own build directory; empty when it is not there (a build without examples).
-inline std::string example_binary(const std::string& name) {
+// The program `name` as built beside the tests (GWNRT_PROGRAM_DIR, <build>/bin); empty when it is
+// not there (a build without the programs).
+inline std::string program_binary(const std::string& name) {
   std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return {};
-  const fs::path candidate = self.parent_path() / ".." / "examples" / name;
-  return fs::exists(candidate, ec) ? fs::canonical(candidate, ec).string() : std::string();
+  const fs::path candidate = fs::path(GWNRT_PROGRAM_DIR) / name;
+  return fs::exists(candidate, ec) ? candidate.string() : std::string();
 }
 
 inline std::string quote(const std::string& s) {

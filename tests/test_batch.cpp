@@ -14,9 +14,9 @@
 
 #include <tbb/global_control.h>
 
-#include "exact_distance.h"
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/field/winding_number.h"
+#include "reference/exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "brute_force_winding.h"
+#include "reference/brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -18,7 +18,7 @@ namespace {
 class ConsistencyCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    binary_ = test::example_binary("gwnrt-consistency");
+    binary_ = test::program_binary("gwnrt-consistency");
     if (binary_.empty()) GTEST_SKIP() << "gwnrt-consistency not built next to the tests";
   }
   std::string binary_;

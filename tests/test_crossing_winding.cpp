@@ -1,5 +1,5 @@
 // Exact w by signed crossings plus the boundary cone (field/crossing_winding.h): against the
-// double brute force of tests/reference on the bundled meshes and on soups built here, with rays
+// double brute force of reference/ on the bundled meshes and on soups built here, with rays
 // placed exactly through vertices and edges of M and of the cone; ∇w and H_w against central
 // differences of the brute-force w; the sheet classification by crossings against the
 // brute-force sides; and the rule by which `auto` chooses.
@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "brute_force_winding.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/evaluate_winding.h"
-#include "parallel_over.h"
+#include "reference/brute_force_winding.h"
+#include "reference/parallel_over.h"
 #include "test_util.h"
 
 namespace gwnrt {

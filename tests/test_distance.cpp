@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "exact_distance.h"
 #include "gwnrt/field/distance.h"
+#include "reference/exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -584,7 +584,7 @@ void add_shape_errors(ProgramCase& c, bool bare_run_is_a_benchmark = false) {
 }
 
 TEST_F(FuzzCli, Query) {
-  const std::string b = test::example_binary("gwnrt-query");
+  const std::string b = test::program_binary("gwnrt-query");
   if (b.empty()) GTEST_SKIP() << "gwnrt-query is not built next to the tests";
   ProgramCase c{b, quote(mesh_), {{"--points", points_}}};
   c.options = {{"--points", hostile_rows("points", "0.2 0.3 0.4\n")},
@@ -608,7 +608,7 @@ TEST_F(FuzzCli, Query) {
 }
 
 TEST_F(FuzzCli, Trace) {
-  const std::string b = test::example_binary("gwnrt-trace");
+  const std::string b = test::program_binary("gwnrt-trace");
   if (b.empty()) GTEST_SKIP() << "gwnrt-trace is not built next to the tests";
   ProgramCase c{b, quote(mesh_), {{"--rays", rays_}}};
   std::vector<std::string> rays = hostile_rows("rays", "0 0 -5 0 0 1\n");
@@ -628,7 +628,7 @@ TEST_F(FuzzCli, Trace) {
 }
 
 TEST_F(FuzzCli, Mesh) {
-  const std::string b = test::example_binary("gwnrt-mesh");
+  const std::string b = test::program_binary("gwnrt-mesh");
   if (b.empty()) GTEST_SKIP() << "gwnrt-mesh is not built next to the tests";
   ProgramCase c{b, quote(open_mesh_), {{"-o", out("out.ply")}, {"--resolution", "8"}}};
   c.options = {{"-o",
@@ -652,7 +652,7 @@ TEST_F(FuzzCli, Mesh) {
 }
 
 TEST_F(FuzzCli, Consistency) {
-  const std::string b = test::example_binary("gwnrt-consistency");
+  const std::string b = test::program_binary("gwnrt-consistency");
   if (b.empty()) GTEST_SKIP() << "gwnrt-consistency is not built next to the tests";
   // Against the CPU itself: the whole comparison runs without a GPU.
   ProgramCase c{b,
@@ -678,7 +678,7 @@ TEST_F(FuzzCli, Consistency) {
 }
 
 TEST_F(FuzzCli, SdfStudy) {
-  const std::string b = test::example_binary("gwnrt-sdf-study");
+  const std::string b = test::program_binary("gwnrt-sdf-study");
   if (b.empty()) GTEST_SKIP() << "gwnrt-sdf-study is not built next to the tests";
   ProgramCase c{b,
                 quote(open_mesh_),
@@ -701,7 +701,7 @@ TEST_F(FuzzCli, SdfStudy) {
 // Every run that passes the checks takes a second (its timings are best of 3 runs of at least
 // 0.1 s each, three times), so only values a check must refuse, and few meshes.
 TEST_F(FuzzCli, BenchTrace) {
-  const std::string b = test::example_binary("gwnrt-bench-trace");
+  const std::string b = test::program_binary("gwnrt-bench-trace");
   if (b.empty()) GTEST_SKIP() << "gwnrt-bench-trace is not built next to the tests";
   ProgramCase c{
       b,
@@ -724,7 +724,7 @@ TEST_F(FuzzCli, BenchTrace) {
 }
 
 TEST_F(FuzzCli, BenchQuery) {
-  const std::string b = test::example_binary("gwnrt-bench-query");
+  const std::string b = test::program_binary("gwnrt-bench-query");
   if (b.empty()) GTEST_SKIP() << "gwnrt-bench-query is not built next to the tests";
   ProgramCase c{b, quote(open_mesh_), {{"--points", "64"}, {"--brute-seconds", "0.05"}}};
   // A budget of 1e39 s made the brute-force subset's growth overflow its integer arithmetic.
@@ -742,7 +742,7 @@ TEST_F(FuzzCli, BenchQuery) {
 }
 
 TEST_F(FuzzCli, BenchMesh) {
-  const std::string b = test::example_binary("gwnrt-bench-mesh");
+  const std::string b = test::program_binary("gwnrt-bench-mesh");
   if (b.empty()) GTEST_SKIP() << "gwnrt-bench-mesh is not built next to the tests";
   ProgramCase c{b, quote(open_mesh_) + " --no-self-intersections", {{"--resolutions", "8"}, {"--samples", "64"}}};
   c.options = {{"--resolutions", {"", "0", "8,,8", "8,0", "70000", "-8", "8,nan"}},
@@ -759,7 +759,7 @@ TEST_F(FuzzCli, BenchMesh) {
 // one ray misses S (saying so on stdout): an answer, not an error.
 TEST_F(FuzzCli, LibraryExamples) {
   for (const char* name : {"gwnrt-library-example", "gwnrt-embree-example"}) {
-    const std::string b = test::example_binary(name);
+    const std::string b = test::program_binary(name);
     if (b.empty()) continue;  // the Embree one is built with Embree only
     std::vector<std::string> meshes = hostile_meshes(11);
     meshes.push_back(mesh_);
@@ -775,7 +775,7 @@ TEST_F(FuzzCli, LibraryExamples) {
 // costs most of a second (loading Embree and OpenImageIO), so only a few values a check must
 // refuse, the bad output paths, and few meshes.
 TEST_F(FuzzCli, Render) {
-  const std::string b = test::example_binary("gwnrt-render");
+  const std::string b = test::program_binary("gwnrt-render");
   if (b.empty()) GTEST_SKIP() << "gwnrt-render is built with Embree only";
   ProgramCase c{b,
                 quote(open_mesh_),
@@ -810,7 +810,7 @@ TEST_F(LimitsCli, SizesBeyondMemoryAreRefusedUpFront) {
        "--points 10 --cloud 1000000000000000 would need "},
       {"gwnrt-bench-query", quote(mesh_) + " --points 1000000000000000", "--points 1000000000000000 would need "}};
   for (const Case& c : cases) {
-    const std::string b = test::example_binary(c.program);
+    const std::string b = test::program_binary(c.program);
     if (b.empty()) continue;
     const RunResult r = run_with_timeout(b, c.args);
     SCOPED_TRACE(std::string(c.program) + " " + c.args);
@@ -828,7 +828,7 @@ using test::kAddressSanitizer;
 // to allocate (and, without the limit, took 25 s and 2 GB).
 TEST_F(LimitsCli, MeshingBudgetIsTheMemoryAvailable) {
   if (kAddressSanitizer) GTEST_SKIP() << "AddressSanitizer reserves more address space than ulimit -v allows";
-  const std::string b = test::example_binary("gwnrt-mesh");
+  const std::string b = test::program_binary("gwnrt-mesh");
   if (b.empty()) GTEST_SKIP() << "gwnrt-mesh is not built next to the tests";
   const std::string script = "ulimit -v 1000000 && exec " + quote(b) + " " + quote(open_mesh_) + " -o " +
                              quote(out("o.ply")) + " --resolution 1600";
@@ -842,7 +842,7 @@ TEST_F(LimitsCli, MeshingBudgetIsTheMemoryAvailable) {
 // A benchmark checks all its mesh files before it runs the first: a missing second one used to fail
 // only after the first mesh's timings.
 TEST_F(LimitsCli, BenchmarkInputFilesAreCheckedFirst) {
-  const std::string b = test::example_binary("gwnrt-bench-trace");
+  const std::string b = test::program_binary("gwnrt-bench-trace");
   if (b.empty()) GTEST_SKIP() << "gwnrt-bench-trace is not built next to the tests";
   const RunResult r = run_with_timeout(b, quote(mesh_) + " " + quote(out("missing.obj")) + " --width 8 --height 6");
   expect_clean_exit(r, "two meshes, the second missing");
@@ -872,7 +872,7 @@ TEST_F(LimitsCli, TraceOptionsAreRefusedByTheirFlag) {
       {"gwnrt-render", quote(open_mesh_) + " --integrator first-hit --width 8 --height 6 -o " + quote(out("f8.png"))}};
   size_t ran = 0;
   for (const Program& p : programs) {
-    const std::string b = test::example_binary(p.name);
+    const std::string b = test::program_binary(p.name);
     if (b.empty()) continue;  // gwnrt-render is built with Embree only
     ++ran;
     for (const auto& [flag, values] : bad) {
@@ -896,7 +896,7 @@ TEST_F(LimitsCli, TraceOptionsAreRefusedByTheirFlag) {
   }
   EXPECT_GE(ran, 1u) << "gwnrt-trace is not built next to the tests";
   // The benchmark takes the same three (its --eps had no upper limit, its --level no check).
-  const std::string bench = test::example_binary("gwnrt-bench-trace");
+  const std::string bench = test::program_binary("gwnrt-bench-trace");
   if (bench.empty()) return;
   for (const auto& [flag, values] : bad) {
     if (flag != "--level" && flag != "--eps" && flag != "--beta") continue;
@@ -923,7 +923,7 @@ TEST_F(LimitsCli, UnknownObjStatementsAreWarnedAbout) {
       {"gwnrt-bench-query", quote(mesh) + " --points 64 --brute-seconds 0.05"},
       {"gwnrt-bench-mesh", quote(mesh) + " --resolutions 8 --samples 64 --no-self-intersections"}};
   for (const auto& [program, args] : runs) {
-    const std::string b = test::example_binary(program);
+    const std::string b = test::program_binary(program);
     if (b.empty()) continue;
     const RunResult r = run_with_timeout(b, args);
     expect_clean_exit(r, args);

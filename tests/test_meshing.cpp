@@ -864,9 +864,8 @@ TEST(Meshing, EmptySurfaceGivesAnEmptyMeshAndSaysSo) {
 class MeshCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    binary_ = test::example_binary("gwnrt-mesh");
-    if (binary_.empty())
-      GTEST_SKIP() << "gwnrt-mesh not built next to the tests (expected <tests>/../examples/gwnrt-mesh)";
+    binary_ = test::program_binary("gwnrt-mesh");
+    if (binary_.empty()) GTEST_SKIP() << "gwnrt-mesh not built next to the tests (expected <build>/bin/gwnrt-mesh)";
   }
   std::string binary_;
 };

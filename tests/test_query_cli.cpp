@@ -32,7 +32,7 @@ using test::read_file;
 using test::RunResult;
 using test::temp_path;
 
-std::string query_binary() { return test::example_binary("gwnrt-query"); }
+std::string query_binary() { return test::program_binary("gwnrt-query"); }
 
 std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
 std::string probe_points_path() { return test::data_path("bunny_probe_points.txt"); }
@@ -90,8 +90,7 @@ class QueryCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
     binary_ = query_binary();
-    if (binary_.empty())
-      GTEST_SKIP() << "gwnrt-query not built next to the tests (expected <tests>/../examples/gwnrt-query)";
+    if (binary_.empty()) GTEST_SKIP() << "gwnrt-query not built next to the tests (expected <build>/bin/gwnrt-query)";
   }
   std::string binary_;
 };
@@ -106,7 +105,7 @@ TEST(ProgramExitStatus, RefusedCommandLinesExitAsTheProgramsOwnChecksDo) {
       {"gwnrt-bench-trace", 1}, {"gwnrt-bench-mesh", 1}, {"gwnrt-consistency", 3}};
   int built = 0;
   for (const auto& [name, refused] : programs) {
-    const std::string binary = test::example_binary(name);
+    const std::string binary = test::program_binary(name);
     if (binary.empty()) continue;  // gwnrt-render needs Embree and OpenImageIO
     ++built;
     const test::RunResult flag = test::run_program(binary, "--no-such-flag");

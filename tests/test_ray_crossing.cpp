@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "brute_force_winding.h"
 #include "gwnrt/trace/ray.h"
 #include "gwnrt/trace/surface_trace.h"
+#include "reference/brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -410,7 +410,7 @@ TEST(Scale, FarPointsAreAnsweredUpToTheLimitAndRefusedBeyond) {
 
 TEST(ScaleCli, QueryRefusesAnUnservedMeshNamingIt) {
   // The gwnrt-query printed w = -nan, udist = inf at 1e30 and exited 0.
-  const std::string binary = test::example_binary("gwnrt-query");
+  const std::string binary = test::program_binary("gwnrt-query");
   if (binary.empty()) GTEST_SKIP() << "gwnrt-query not built next to the tests";
   const std::string mesh = test::temp_path("huge_tet") + ".obj", points = test::temp_path("huge_points") + ".txt";
   {
@@ -429,7 +429,7 @@ TEST(ScaleCli, QueryRefusesAnUnservedMeshNamingIt) {
 TEST(UnreachableLevelCli, TraceSaysTheSurfaceIsEmpty) {
   // gwnrt-trace at the level 3e9: every ray misses (no sheet hit with a flipped normal)
   // and a warning says why.
-  const std::string binary = test::example_binary("gwnrt-trace");
+  const std::string binary = test::program_binary("gwnrt-trace");
   if (binary.empty()) GTEST_SKIP() << "gwnrt-trace not built next to the tests";
   const std::string rays = test::temp_path("rays") + ".txt";
   std::ofstream(rays) << "-1 0.1 0.05 1 0 0\n0.05 -1 0.1 0 1 0\n";

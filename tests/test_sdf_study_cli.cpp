@@ -1,4 +1,4 @@
-// The accuracy study (examples/sdf_study) as the issue's check that the Harnack lower bound never
+// The accuracy study (bench/sdf_study.cpp) as the issue's check that the Harnack lower bound never
 // exceeds the distance to S on the study's points: the program computes an independent
 // reference (exact sheet distances; points of the smooth pieces confirmed by exact sums) and
 // exits with status 3 if ρ lies above it anywhere. Small runs here (a few thousand points, a
@@ -16,7 +16,7 @@ namespace {
 class SdfStudyCli : public ::testing::TestWithParam<const char*> {
  protected:
   void SetUp() override {
-    binary_ = test::example_binary("gwnrt-sdf-study");
+    binary_ = test::program_binary("gwnrt-sdf-study");
     if (binary_.empty()) GTEST_SKIP() << "gwnrt-sdf-study not built next to the tests";
   }
   std::string binary_;
@@ -38,7 +38,7 @@ INSTANTIATE_TEST_SUITE_P(Meshes, SdfStudyCli, ::testing::Values("bunny_holes.obj
 // Issue 15 item 16: --smooth-share nan was accepted (CLI11's Range lets nan through), and a
 // positive count of 0 answered with a 300-digit range.
 TEST(SdfStudyCliArguments, OutOfRangeValuesAreRefusedPlainly) {
-  const std::string binary = test::example_binary("gwnrt-sdf-study");
+  const std::string binary = test::program_binary("gwnrt-sdf-study");
   if (binary.empty()) GTEST_SKIP() << "gwnrt-sdf-study not built next to the tests";
   for (const std::string args : {" --smooth-share nan", " --smooth-share 1.5", " --points 0", " --beta nan"}) {
     const test::RunResult r = test::run_program(binary, test::quote(test::data_path("bunny_holes.obj")) + args);

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "brute_force_winding.h"
-#include "exact_distance.h"
 #include "gwnrt/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "gwnrt/sdf/signed_distance.h"
+#include "reference/brute_force_winding.h"
+#include "reference/exact_distance.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "brute_force_winding.h"
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/sdf/sheets.h"
-#include "parallel_over.h"
+#include "reference/brute_force_winding.h"
+#include "reference/parallel_over.h"
 #include "test_util.h"
 
 namespace gwnrt {

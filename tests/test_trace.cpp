@@ -15,13 +15,13 @@
 
 #include <tbb/parallel_for.h>
 
-#include "first_crossing.h"
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/trace/surface_trace.h"
+#include "reference/first_crossing.h"
 #include "test_util.h"
 
 #ifdef GWNRT_HAVE_EMBREE
-#include "embree_triangles.h"
+#include "render/embree_triangles.h"
 #endif
 
 namespace gwnrt {
@@ -191,7 +191,7 @@ class EmbreeScene {
   }
 
  private:
-  examples::TriangleScene scene_;
+  render::TriangleScene scene_;
 };
 
 // Rays for a closed mesh: origins outside aimed at the box, origins outside in any direction, and

@@ -34,9 +34,8 @@ std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
 class TraceCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    binary_ = test::example_binary("gwnrt-trace");
-    if (binary_.empty())
-      GTEST_SKIP() << "gwnrt-trace not built next to the tests (expected <tests>/../examples/gwnrt-trace)";
+    binary_ = test::program_binary("gwnrt-trace");
+    if (binary_.empty()) GTEST_SKIP() << "gwnrt-trace not built next to the tests (expected <build>/bin/gwnrt-trace)";
   }
   // The CSV of a run that must succeed, with its header checked.
   std::vector<std::vector<std::string>> trace(const std::string& mesh, const std::string& rays) {

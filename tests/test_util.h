@@ -1,5 +1,5 @@
 // Shared helpers for the tests: bundled meshes, analytic shapes and point sets. The independent
-// references the tests compare against are in tests/reference/.
+// references the tests compare against are in reference/ at the top.
 #pragma once
 
 #include <algorithm>
@@ -15,7 +15,7 @@
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
-#include "point_mix.h"
+#include "reference/point_mix.h"
 
 namespace gwnrt::test {
 
@@ -181,7 +181,7 @@ inline Aabb mesh_bounds(const Mesh& m) {
   return box;
 }
 
-// The benchmark's point mix (examples/common/point_mix.h).
+// The benchmark's point mix (reference/point_mix.h).
 inline std::vector<vec3> sample_points(const Aabb& box, size_t count, uint32_t seed) {
   return point_mix(box, count, seed);
 }

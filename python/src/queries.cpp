@@ -236,7 +236,7 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
 }
 
 // The C++ batch as a C++ program calls it (results in a PointResult array allocated once, outside
-// the timing), `repeats` times: the baseline of the Python benchmark (examples/python/bench_python.py).
+// the timing), `repeats` times: the baseline of the Python benchmark (bench/bench_python.py).
 std::vector<double> cxx_batch_seconds(const PythonModel& p, const py::handle& points_obj,
                                       const std::vector<std::string>& fields, const std::string& method, int64_t order,
                                       float beta, int repeats, Threads threads) {

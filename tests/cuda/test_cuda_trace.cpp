@@ -9,8 +9,8 @@
 #include <string>
 
 #include "../test_util.h"
-#include "camera.h"
 #include "gwnrt/cuda.h"
+#include "render/camera.h"
 
 namespace gwnrt {
 namespace {
@@ -40,7 +40,7 @@ TEST_P(CudaTrace, MatchesTheCpuBackend) {
   const float diag = glm::length(box.hi - box.lo);
   std::vector<Ray> rays;
   for (const float azimuth : {30.0f, 150.0f, 260.0f}) {
-    const examples::PinholeCamera camera = examples::frame_box(box, 160, 120, azimuth, 20.0f);
+    const render::PinholeCamera camera = render::frame_box(box, 160, 120, azimuth, 20.0f);
     for (int y = 0; y < camera.height; ++y)
       for (int x = 0; x < camera.width; ++x) rays.push_back(camera.ray(x, y));
   }

@@ -23,13 +23,13 @@
 
 #include "../cli_util.h"
 #include "../test_util.h"
-#include "camera.h"
-#include "embree_ray.h"
-#include "embree_triangles.h"
-#include "first_crossing.h"
 #include "gwnrt/embree.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/trace/surface_trace.h"
+#include "reference/first_crossing.h"
+#include "render/camera.h"
+#include "render/embree_ray.h"
+#include "render/embree_triangles.h"
 
 namespace gwnrt {
 namespace {
@@ -167,7 +167,7 @@ struct View {
 std::vector<Ray> camera_rays(const Aabb& box, int res, std::initializer_list<View> views) {
   std::vector<Ray> rays;
   for (const View& v : views) {
-    const examples::PinholeCamera cam = examples::frame_box(box, res, res, v.azimuth, v.elevation);
+    const render::PinholeCamera cam = render::frame_box(box, res, res, v.azimuth, v.elevation);
     for (int y = 0; y < res; ++y)
       for (int x = 0; x < res; ++x) rays.push_back(cam.ray(x, y));
   }
@@ -242,7 +242,7 @@ std::string describe(const RTCRayHit& h) {
 }
 
 RTCRayHit make_rayhit(const Ray& r, unsigned id = 0, unsigned mask = ~0u) {
-  return examples::embree_ray_hit(r, mask, id);
+  return render::embree_ray_hit(r, mask, id);
 }
 
 class Context {
@@ -426,7 +426,7 @@ TEST(EmbreePlugin, WatertightMatchesEmbreeTriangles) {
   Scene a(device), b(device);
   constexpr unsigned kGwnId = 5;  // not 0: the reported geomID must be the attached one
   ASSERT_EQ(a.attach(gwn_geometry(device.get(), mesh), kGwnId), kGwnId);
-  const unsigned tri_id = b.attach(examples::new_triangle_geometry(device.get(), mesh));
+  const unsigned tri_id = b.attach(render::new_triangle_geometry(device.get(), mesh));
   a.commit();
   b.commit();
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
@@ -942,7 +942,7 @@ void check_filters(bool as_context_filter) {
   Device device;
   Scene triangles(device);
   triangles.attach([&] {
-    RTCGeometry g = examples::new_triangle_geometry(device.get(), mesh);
+    RTCGeometry g = render::new_triangle_geometry(device.get(), mesh);
     rtcSetGeometryIntersectFilterFunction(g, record_filter);
     return g;
   }());
@@ -1060,7 +1060,7 @@ TEST(EmbreePlugin, FiltersInsideInstancesSeeInstanceId) {
   Device device;
   Scene gwn_object(device), tri_object(device);
   for (auto [scene, g] : {std::pair{&gwn_object, gwn_geometry(device.get(), mesh)},
-                          std::pair{&tri_object, examples::new_triangle_geometry(device.get(), mesh)}}) {
+                          std::pair{&tri_object, render::new_triangle_geometry(device.get(), mesh)}}) {
     rtcSetGeometryIntersectFilterFunction(g, record_filter);
     rtcSetGeometryOccludedFilterFunction(g, record_filter);
     scene->attach(g);
@@ -1151,7 +1151,7 @@ TEST(EmbreePlugin, ThreadsGiveIdenticalResults) {
   // A sphere cutting through the bunny's side, beside the GWN object in the same scene.
   Mesh sphere = test::make_sphere(2, float(0.2 * diag));
   for (vec3& p : sphere.positions) p += vec3(box.hi.x, box.centre().y, box.centre().z);
-  scene.attach(examples::new_triangle_geometry(device.get(), sphere));
+  scene.attach(render::new_triangle_geometry(device.get(), sphere));
   scene.commit();
   Aabb both = box;
   both.extend(test::mesh_bounds(sphere));

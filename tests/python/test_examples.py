@@ -1,4 +1,5 @@
-"""The Python examples run end to end on small inputs (examples/python)."""
+"""The Python examples (examples/python) and the Python benchmark (bench/) run end to end on small
+inputs."""
 
 import json
 import os
@@ -12,12 +13,13 @@ import gwnrt
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 EXAMPLES = os.path.join(ROOT, "examples", "python")
+BENCH = os.path.join(ROOT, "bench")
 DATA = os.environ.get("GWNRT_DATA_DIR", os.path.join(ROOT, "data"))
 BUNNY_HOLES = os.path.join(DATA, "bunny_holes.obj")
 
 
-def run(script, *args):
-    done = subprocess.run([sys.executable, os.path.join(EXAMPLES, script), *map(str, args)], capture_output=True,
+def run(script, *args, folder=EXAMPLES):
+    done = subprocess.run([sys.executable, os.path.join(folder, script), *map(str, args)], capture_output=True,
                           text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     return done.stdout
@@ -56,7 +58,7 @@ def test_dask_grid_on_a_local_cluster(tmp_path):
 def test_benchmark_writes_its_table_and_json(tmp_path):
     report = tmp_path / "bench.json"
     out = run("bench_python.py", "--mesh", BUNNY_HOLES, "--points", 20000, "--dask-points", 40000, "--chunks",
-              10000, "--repeats", 1, "--json", report)
+              10000, "--repeats", 1, "--json", report, folder=BENCH)
     assert "Python/C++" in out and "/in-process" in out
     figures = json.loads(report.read_text())
     assert [r["query"] for r in figures["python_vs_cxx"]] == ["w", "sdf"]

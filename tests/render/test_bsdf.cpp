@@ -1,4 +1,4 @@
-// The path tracer's materials (examples/render/bsdf.h) against references of their own:
+// The path tracer's materials (render/bsdf.h) against references of their own:
 //   - GGX, Smith and Fresnel written again here in double precision from their textbook forms
 //     (tan θ, Λ, angles), not from the implementation's rearranged ones;
 //   - integrals over the hemisphere by Gauss–Legendre quadrature (3 × 3 points per cell) on a
@@ -17,7 +17,7 @@
 #include <random>
 #include <vector>
 
-#include "bsdf.h"
+#include "render/bsdf.h"
 
 namespace gwnrt::render {
 namespace {

@@ -24,7 +24,7 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "environment.h"
+#include "render/environment.h"
 
 namespace gwnrt::render {
 namespace {

@@ -6,11 +6,11 @@
 #include <gtest/gtest.h>
 
 #include "../test_util.h"
-#include "camera.h"
-#include "integrators/first_hit.h"
+#include "render/camera.h"
+#include "render/integrators/first_hit.h"
 
 #if defined(GWNRT_HAVE_CUDA)
-#include "integrators/first_hit_cuda.h"
+#include "render/integrators/first_hit_cuda.h"
 #endif
 
 namespace gwnrt::render {
@@ -26,7 +26,7 @@ TEST(FirstHitCuda, MatchesTheCpuImage) {
     const GwnModel model = test::build_model(test::load_test_mesh(mesh));
     cuda::DeviceModel device;
     ASSERT_TRUE(cuda::DeviceModel::upload(model, device).ok());
-    const examples::PinholeCamera camera = examples::frame_box(model.bounds(), 320, 240);
+    const render::PinholeCamera camera = render::frame_box(model.bounds(), 320, 240);
     FirstHitSettings settings;
     const FirstHitRender cpu = render_first_hit(model.view(), camera, settings);
     std::vector<FirstHitSample> pixels;

@@ -10,9 +10,9 @@
 #include <tbb/global_control.h>
 
 #include "../test_util.h"
-#include "integrators/path.h"
-#include "render_scene.h"
-#include "scene.h"
+#include "render/integrators/path.h"
+#include "render/render_scene.h"
+#include "render/scene.h"
 
 namespace gwnrt::render {
 namespace {
@@ -31,7 +31,7 @@ SceneDesc furnace(float albedo, float environment) {
   sphere.instances.push_back(glm::mat4(1.0f));
   s.gwn_objects.push_back(std::move(sphere));
   s.environment.radiance = Spectrum(environment);
-  s.camera = examples::look_at(vec3(0.0f, 0.0f, 4.0f), vec3(0.0f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 40, 40);
+  s.camera = render::look_at(vec3(0.0f, 0.0f, 4.0f), vec3(0.0f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 40, 40);
   return s;
 }
 
@@ -275,7 +275,7 @@ TEST(PathTracer, FloorUnderAnEmissiveCeilingReflectsAlbedoTimesRadiance) {
   ceiling.mesh = square(1000.0f, 1.0f, false);
   ceiling.material = 1;
   s.meshes = {floor, ceiling};
-  s.camera = examples::look_at(vec3(0.0f, 0.5f, 0.0f), vec3(0.3f, 0.0f, 0.2f), vec3(0.0f, 1.0f, 0.0f), 30.0f, 24, 24);
+  s.camera = render::look_at(vec3(0.0f, 0.5f, 0.0f), vec3(0.3f, 0.0f, 0.2f), vec3(0.0f, 1.0f, 0.0f), 30.0f, 24, 24);
   size_t pixels = 0;
   const double mean = mean_radiance_on(s, 64, albedo, pixels);
   std::printf("[ emissive ceiling ] %zu floor pixels: mean %.5f, expected %.5f\n", pixels, mean,
@@ -296,7 +296,7 @@ TEST(PathTracer, FloorUnderTheSunFollowsLambert) {
   s.sun.direction = glm::normalize(vec3(0.3f, 0.8f, 0.2f));
   s.sun.radiance = Spectrum(1.0e4f);
   s.sun.angular_radius = 0.01f;
-  s.camera = examples::look_at(vec3(0.0f, 2.0f, 0.0f), vec3(0.5f, 0.0f, 0.1f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 16, 16);
+  s.camera = render::look_at(vec3(0.0f, 2.0f, 0.0f), vec3(0.5f, 0.0f, 0.1f), vec3(0.0f, 1.0f, 0.0f), 40.0f, 16, 16);
   size_t pixels = 0;
   const double mean = mean_radiance_on(s, 16, albedo, pixels);
   const double cone = 2.0 * kPi * (1.0 - std::cos(0.01));

@@ -20,9 +20,8 @@ namespace {
 class RenderCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    binary_ = test::example_binary("gwnrt-render");
-    if (binary_.empty())
-      GTEST_SKIP() << "gwnrt-render not built next to the tests (expected <tests>/../examples/gwnrt-render)";
+    binary_ = test::program_binary("gwnrt-render");
+    if (binary_.empty()) GTEST_SKIP() << "gwnrt-render not built next to the tests (expected <build>/bin/gwnrt-render)";
   }
   // Runs with `args`, writing to a temporary image; checks it exists with the given size.
   void expect_image(const std::string& args, const std::string& extension, int width, int height) {

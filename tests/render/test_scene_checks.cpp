@@ -14,10 +14,10 @@
 #include "../cli_util.h"
 #include "../mesh_files.h"
 #include "../test_util.h"
-#include "image_output.h"
-#include "integrators/path.h"
-#include "render_scene.h"
-#include "scene.h"
+#include "render/image_output.h"
+#include "render/integrators/path.h"
+#include "render/render_scene.h"
+#include "render/scene.h"
 
 namespace gwnrt::render {
 namespace {
@@ -40,7 +40,7 @@ void expect_refused(const std::string& text, const std::string& location, const 
 bool finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Every corner and the centre ray of an accepted camera are finite and unit.
-void expect_finite_rays(const examples::PinholeCamera& cam) {
+void expect_finite_rays(const render::PinholeCamera& cam) {
   for (const auto& [x, y] : {std::pair{0, 0}, std::pair{cam.width - 1, 0}, std::pair{0, cam.height - 1},
                              std::pair{cam.width - 1, cam.height - 1}, std::pair{cam.width / 2, cam.height / 2}}) {
     const Ray r = cam.ray(x, y);
@@ -284,7 +284,7 @@ TEST(SceneChecks, Issue15Item1_RenderSceneDropsInvalidRays) {
     s.meshes.push_back(plane);
     s.environment.radiance = Spectrum(1.0f);
     // Built by hand, past the reader's checks.
-    s.camera = examples::look_along(eye, vec3(0, -1, 0), vec3(0, 0, 1), 40.0f, 4, 3);
+    s.camera = render::look_along(eye, vec3(0, -1, 0), vec3(0, 0, 1), 40.0f, 4, 3);
     RenderScene scene;
     ASSERT_TRUE(scene.build(s).ok());
     RenderSettings settings;

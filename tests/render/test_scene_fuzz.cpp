@@ -23,9 +23,9 @@
 
 #include "../cli_util.h"
 #include "../test_util.h"
-#include "integrators/path.h"
-#include "render_scene.h"
-#include "scene.h"
+#include "render/integrators/path.h"
+#include "render/render_scene.h"
+#include "render/scene.h"
 
 namespace gwnrt::render {
 namespace {
@@ -223,7 +223,7 @@ bool radiance_ok(const Spectrum& s) { return finite(s) && s.x >= 0 && s.y >= 0 &
 // Why an accepted scene is not one the renderer can carry, or empty. The limits are those
 // scene.h documents.
 std::string scene_problem(const SceneDesc& s) {
-  const examples::PinholeCamera& c = s.camera;
+  const render::PinholeCamera& c = s.camera;
   if (!(c.width >= 1 && c.width <= 32768 && c.height >= 1 && c.height <= 32768)) return "image size";
   if (!within(c.eye, 1e12f) || !finite(c.eye)) return "eye";
   for (const auto& [x, y] : {std::pair{0, 0}, std::pair{c.width - 1, c.height - 1}, std::pair{c.width / 2, 0}}) {
@@ -335,7 +335,7 @@ TEST_F(SceneFuzz, HostileScenesGiveASceneOrALocatedError) {
 // A handful through the binary: accepted ones render (exit 0, an image), refused ones exit 1 with
 // a message; none ends in a signal.
 TEST_F(SceneFuzz, HandfulRunEndToEndCli) {
-  const std::string binary = test::example_binary("gwnrt-render");
+  const std::string binary = test::program_binary("gwnrt-render");
   if (binary.empty()) GTEST_SKIP() << "gwnrt-render not built next to the tests";
   const std::vector<Mutation> all = mutations({{"small", kSmallScene}});
   // Accepted and refused mutations of different kinds, picked by their names.

@@ -1,0 +1,20 @@
+// First-hit rendering on the GPU (gwnrt-render --integrator first-hit --device cuda): one thread
+// per pixel running first_hit_pixel, the CPU's per-pixel function. Plain C++ header.
+#pragma once
+
+#include <vector>
+
+#include "gwnrt/cuda.h"
+#include "render/integrators/first_hit_pixel.h"
+
+namespace gwnrt::render {
+
+// Renders camera.width × camera.height pixels `frames` times (the same image each time, for a
+// frame rate); `pixels` gets them row-major. `seconds_per_frame`: the mean of one frame's kernel
+// and the copy of its pixels to the host, the model's upload not included. The trace options must
+// have passed validate_trace_options.
+Status render_first_hit_cuda(const cuda::DeviceModel& model, const render::PinholeCamera& camera,
+                             const FirstHitSettings& settings, int frames, std::vector<FirstHitSample>& pixels,
+                             double& seconds_per_frame);
+
+}  // namespace gwnrt::render
