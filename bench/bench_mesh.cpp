@@ -30,10 +30,10 @@
 #include "apps/common/cli_checks.h"
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
+#include "gwnrt/geometry/ray.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_quality.h"
-#include "gwnrt/trace/ray.h"
 
 namespace {
 

@@ -20,12 +20,12 @@
 #include "apps/common/device_choice.h"
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 #include "reference/point_mix.h"
 
 namespace {

@@ -41,11 +41,11 @@
 #endif
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 
 namespace {
 
@@ -292,7 +292,7 @@ int main(int argc, char** argv) {
     apps::print_load_warnings(kProgram, path, loaded.report);
     const MeshLoadReport& report = loaded.report;
     const double load_sec = loaded.load_seconds, build_sec = loaded.build_seconds;
-    const ModelView view = model_view(model);
+    const ModelView view = model.view();
     const float diag = glm::length(model.bounds().hi - model.bounds().lo);
     MeshSummary sum;
     sum.name = mesh_label(path);

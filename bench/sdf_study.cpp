@@ -31,10 +31,10 @@
 #include "apps/common/cli_checks.h"
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "reference/exact_distance.h"
 #include "reference/kd_tree.h"
@@ -147,7 +147,7 @@ int main(int argc, char** argv) {
   apps::print_load_warnings(kProgram, mesh_path, loaded.report);
   if (level != model.sheet_level())
     if (Status s = model.set_sheet_level(level); !s.ok()) apps::die(kProgram, s.message());
-  const ModelView view = model_view(model);
+  const ModelView view = model.view();
   const double diag = glm::length(dvec3(model.bounds().hi) - dvec3(model.bounds().lo));
   const ExactLevel exact{model.triangle_view(), model.cone_tree().view(), model.triangle_view(), double(level), diag};
   const size_t tris = model.mesh().triangles.size();

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/bvh.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/hd.h"
 
 namespace gwnrt::reference {
 

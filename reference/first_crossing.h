@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 #include "reference/brute_force_winding.h"
 
 namespace gwnrt::reference {

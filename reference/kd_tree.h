@@ -9,7 +9,7 @@
 #include <numeric>
 #include <vector>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt::reference {
 

@@ -7,9 +7,10 @@
 #include <chrono>
 #include <cmath>
 
-#include "gwnrt/batch.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/winding_number.h"
+#include "gwnrt/query/validation.h"
+#include "gwnrt/trace/surface_trace.h"
 #include "reference/parallel_over.h"
 #include "reference/seeded_random.h"
 
@@ -107,7 +108,7 @@ bool on_surface_band(const ExactLevel& e, const dvec3& y) {
 std::vector<CloudPoint> build_cloud(const GwnModel& model, const ExactLevel& exact, float level, size_t target,
                                     size_t max_lines, uint64_t seed, CloudStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();
-  const ModelView view = model_view(model);
+  const ModelView view = model.view();
   TraceOptions options;
   options.level = level;
   std::vector<CloudPoint> cloud;

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "gwnrt/geometry/bvh.h"
-#include "gwnrt/geometry/model.h"
+#include "gwnrt/model/model.h"
 #include "reference/kd_tree.h"
 
 namespace gwnrt::reference {

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <random>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/bvh.h"
-#include "gwnrt/hd.h"
 
 namespace gwnrt::reference {
 

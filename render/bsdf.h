@@ -3,7 +3,7 @@
 // toward the viewer, wi toward the light, both unit). Linear RGB throughout.
 #pragma once
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt::render {
 

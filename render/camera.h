@@ -5,9 +5,9 @@
 
 #include <cmath>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/bvh.h"
-#include "gwnrt/hd.h"
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 
 namespace gwnrt::render {
 

@@ -4,7 +4,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 
 namespace gwnrt::render {
 

@@ -9,8 +9,8 @@
 #include <cstddef>
 #include <string>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/status.h"
 #include "render/embree_ray.h"
 
 namespace gwnrt::render {

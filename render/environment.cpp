@@ -26,7 +26,7 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 
 namespace gwnrt::render {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 #include "render/bsdf.h"
 
 namespace gwnrt::render {

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt::render {
 

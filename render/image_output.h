@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 #include "render/image.h"
 
 namespace gwnrt::render {

@@ -22,7 +22,7 @@
 #include "apps/common/device_choice.h"
 #include "apps/common/program.h"
 #include "apps/common/trace_level.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/query/validation.h"
 #include "render/image_output.h"
 #include "render/integrators/first_hit.h"
 #include "render/integrators/path.h"

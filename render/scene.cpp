@@ -14,9 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/common/trace_level.h"
-#include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/read_file.h"
+#include "gwnrt/query/validation.h"
 
 namespace gwnrt::render {
 namespace {

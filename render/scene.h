@@ -43,9 +43,9 @@
 #include <string>
 #include <vector>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/mesh_io.h"
-#include "gwnrt/status.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "render/bsdf.h"
 #include "render/camera.h"

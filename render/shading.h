@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 #include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::render {

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The checks CI runs besides the Release suite (scripts/test.sh), each callable on its own:
 #   bash scripts/check.sh format       clang-format --dry-run -Werror over every C++/CUDA file
+#   bash scripts/check.sh layers       every #include follows the folders' layering
+#                                      (scripts/check_layers.py)
 #   bash scripts/check.sh sanitize     ASan + UBSan build of the whole suite, run
 #   bash scripts/check.sh tsan         ThreadSanitizer build of the plugin tests and the core's
 #                                      thread tests (tests/threads), run
@@ -11,7 +13,7 @@
 #                                      tests and the programs whose code depends on Embree built,
 #                                      their Embree-dependent tests run), and the library alone (no
 #                                      programs, no tests)
-#   bash scripts/check.sh all          all five, in that order
+#   bash scripts/check.sh all          all six, in that order
 # The TSan build is RelWithDebInfo: its suppressions name frames inside TBB's headers, which only
 # debug information keeps once they are inlined (a Release build reports ~4200 races inside the
 # model build's TBB tasks that RelWithDebInfo attributes and suppresses).
@@ -23,6 +25,10 @@ check_format() {
   mapfile -t files < <(git ls-files '*.h' '*.cpp' '*.cu' '*.cuh')
   clang-format --dry-run -Werror "${files[@]}"
   echo "check format: ${#files[@]} files formatted"
+}
+
+check_layers() {
+  python3 scripts/check_layers.py
 }
 
 check_sanitize() {
@@ -105,10 +111,11 @@ check_configs() {
 
 case "${1:-all}" in
   format) check_format ;;
+  layers) check_layers ;;
   sanitize) check_sanitize ;;
   tsan) check_tsan ;;
   downstream) check_downstream ;;
   configs) check_configs ;;
-  all) check_format; check_sanitize; check_tsan; check_downstream; check_configs ;;
-  *) echo "usage: $0 format|sanitize|tsan|downstream|configs|all"; exit 2 ;;
+  all) check_format; check_layers; check_sanitize; check_tsan; check_downstream; check_configs ;;
+  *) echo "usage: $0 format|layers|sanitize|tsan|downstream|configs|all"; exit 2 ;;
 esac

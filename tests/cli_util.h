@@ -16,8 +16,8 @@
 
 #include <gtest/gtest.h>
 
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
 
 namespace gwnrt::test {
 

@@ -19,7 +19,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt::test {
 

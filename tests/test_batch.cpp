@@ -69,7 +69,7 @@ class BatchOnRealMeshes : public ::testing::TestWithParam<const char*> {};
 TEST_P(BatchOnRealMeshes, BitIdenticalToSinglePointsInInputOrder) {
   const GwnModel model = build_model(load_test_mesh(GetParam()));
   const std::vector<vec3> points = sample_points(mesh_bounds(model.mesh()), 5000, 21);
-  const ModelView view = model_view(model);
+  const ModelView view = model.view();
   for (const bool exact : {false, true}) {
     for (int order = 0; order <= 2; ++order) {
       if (exact && order > 0) break;  // exact ignores the order
@@ -103,7 +103,7 @@ TEST_P(BatchOnRealMeshes, LargeBatchVisitedInSpatialOrderAnswersInInputOrder) {
   std::vector<vec3> points = sample_points(mesh_bounds(model.mesh()), 40000, 23);
   points[17] = vec3(kMaxQueryCoordinate, -kMaxQueryCoordinate, 0.0f);
   points[40] = vec3(-kMaxQueryCoordinate, 0.0f, 1e9f);
-  const ModelView view = model_view(model);
+  const ModelView view = model.view();
   for (const WindingMethod method : {WindingMethod::kTaylor, WindingMethod::kCrossing}) {
     QueryRequest request;
     request.method = method;
@@ -408,9 +408,9 @@ TEST(ModelBuild, ZeroAreaTrianglesAddNothingNearTheirLine) {
     const vec3 on_edge(-1 + 2 * s, -1 + 1e-5f, -1 + 1e-5f);
     const vec3 on_diagonal(-1 + 2 * s, 1 - 2 * s, -1 + 1e-5f);
     for (const vec3& x : {on_edge, on_diagonal}) {
-      const float ref = evaluate_point(model_view(plain), x, request).w;
+      const float ref = evaluate_point(plain.view(), x, request).w;
       // Same tree accuracy on both models; zero-area triangles must not move w by 1e-3.
-      EXPECT_NEAR(evaluate_point(model_view(with_degenerate), x, request).w, ref, 1e-3f)
+      EXPECT_NEAR(evaluate_point(with_degenerate.view(), x, request).w, ref, 1e-3f)
           << "x = (" << x.x << ", " << x.y << ", " << x.z << ")";
     }
   }

@@ -22,9 +22,9 @@
 #include <gtest/gtest.h>
 
 #include "cli_util.h"
-#include "gwnrt/batch.h"
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 #include "mesh_files.h"
 #include "test_util.h"
 

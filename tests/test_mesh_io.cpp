@@ -19,13 +19,13 @@
 #include <utility>
 #include <vector>
 
-#include "gwnrt/batch.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/mesh_writer.h"
 #include "gwnrt/io/read_file.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 #include "mesh_files.h"
 #include "test_util.h"
 

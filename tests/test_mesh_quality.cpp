@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "gwnrt/geometry/exact_predicates.h"
 #include "test_util.h"
 
 namespace gwnrt {

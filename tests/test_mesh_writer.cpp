@@ -27,9 +27,9 @@
 #endif
 
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/surface_mesh.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/mesh_writer.h"
-#include "gwnrt/meshing/surface_mesh.h"
 
 namespace gwnrt {
 namespace {

@@ -19,7 +19,7 @@
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/solid_angle.h"
 #include "gwnrt/field/winding_number.h"
-#include "gwnrt/geometry/model.h"
+#include "gwnrt/model/model.h"
 #include "gwnrt/trace/harnack.h"
 #include "gwnrt/trace/phase.h"
 #include "test_util.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "reference/brute_force_winding.h"
 #include "test_util.h"

@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "cli_util.h"
-#include "gwnrt/batch.h"
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/meshing/extract_surface.h"
+#include "gwnrt/query/batch.h"
 #include "test_util.h"
 
 namespace gwnrt {

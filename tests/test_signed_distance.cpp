@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/batch.h"
+#include "gwnrt/query/batch.h"
 #include "gwnrt/sdf/sheets.h"
 #include "gwnrt/sdf/signed_distance.h"
 #include "reference/brute_force_winding.h"

@@ -14,8 +14,8 @@
 #include <gtest/gtest.h>
 
 #include "cli_util.h"
-#include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/query/batch.h"
 #include "test_util.h"
 
 namespace gwnrt {

@@ -11,10 +11,10 @@
 
 #include <gtest/gtest.h>
 
-#include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 #include "reference/point_mix.h"
 
 namespace gwnrt::test {

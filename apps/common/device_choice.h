@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "gwnrt/cuda.h"

@@ -8,8 +8,8 @@
 #include <utility>
 
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
 
 namespace gwnrt::apps {
 

@@ -13,11 +13,11 @@
 #include <system_error>
 #include <vector>
 
-#include "gwnrt/batch.h"
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
+#include "gwnrt/base/status.h"
+#include "gwnrt/geometry/ray.h"
 #include "gwnrt/io/read_file.h"
-#include "gwnrt/status.h"
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/query/validation.h"
 
 namespace gwnrt::apps {
 

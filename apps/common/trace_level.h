@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "gwnrt/geometry/model.h"
+#include "gwnrt/model/model.h"
 #include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt::apps {

@@ -19,7 +19,7 @@
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
 #include "apps/common/progress_bar.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/io/mesh_writer.h"
 #include "gwnrt/meshing/attribute_transfer.h"
 #include "gwnrt/meshing/extract_surface.h"

@@ -22,10 +22,10 @@
 #include "apps/common/program.h"
 #include "apps/common/progress_bar.h"
 #include "apps/common/trace_level.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "gwnrt/cuda.h"

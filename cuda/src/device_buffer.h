@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 
 namespace gwnrt::cuda {
 

@@ -1,8 +1,8 @@
 // Batch queries on the GPU: one thread per point, each running the core's evaluate_point.
 #include <vector>
 
-#include "gwnrt/sdf/point_columns.h"
-#include "gwnrt/sdf/point_query.h"
+#include "gwnrt/query/point_columns.h"
+#include "gwnrt/query/point_query.h"
 #include "map_on_device.cuh"
 
 namespace gwnrt::cuda {

@@ -1,5 +1,5 @@
 // Ray tracing on the GPU: one thread per ray, each running the core's trace_surface.
-#include "gwnrt/batch.h"
+#include "gwnrt/query/batch.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "map_on_device.cuh"
 

@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "gwnrt/batch.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/query/batch.h"
 
 int main(int argc, char** argv) {
   const char* path = argc > 1 ? argv[1] : "bunny.obj";

@@ -12,10 +12,10 @@
 #include "callbacks.h"
 #include "embree_api.h"
 #include "geometry_record.h"
-#include "gwnrt/batch.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/validation.h"
 #include "gwnrt/trace/surface_trace.h"
 
 namespace {

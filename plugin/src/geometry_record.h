@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "gwnrt/embree.h"
-#include "gwnrt/geometry/model.h"
+#include "gwnrt/model/model.h"
 #include "gwnrt/trace/trace_types.h"
 
 struct GWNRTMeshTy {

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <string>
 
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/io/mesh_io.h"
+#include "gwnrt/model/model.h"
 #include "python_model.h"
 
 namespace gwnrt::python {

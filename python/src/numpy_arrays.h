@@ -17,8 +17,8 @@
 #include <pybind11/stl.h>
 #include <tbb/task_arena.h>
 
-#include "gwnrt/hd.h"
-#include "gwnrt/status.h"
+#include "gwnrt/base/hd.h"
+#include "gwnrt/base/status.h"
 
 namespace gwnrt::python {
 

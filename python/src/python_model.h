@@ -8,7 +8,7 @@
 #include <shared_mutex>
 #include <string>
 
-#include "gwnrt/geometry/model.h"
+#include "gwnrt/model/model.h"
 #include "numpy_arrays.h"
 
 #if defined(GWNRT_HAVE_CUDA)

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "gwnrt/batch.h"
+#include "gwnrt/query/batch.h"
 #include "python_model.h"
 
 namespace gwnrt::python {

@@ -10,9 +10,9 @@
 #include "apps/common/program.h"
 #include "apps/common/progress_bar.h"
 #include "apps/common/trace_level.h"
-#include "gwnrt/batch.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/validation.h"
 #include "render/image_output.h"
 #include "render/render_program.h"
 #include "render/tiles.h"
@@ -198,7 +198,7 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
     apps::ProgressBar bar(progress, size_t(job.width) * size_t(job.height) * size_t(job.frames), "px");
     double seconds = 0;
     for (int f = 0; f < job.frames; ++f) {
-      render = render_first_hit(model_view(model), camera, job.settings, &progress);
+      render = render_first_hit(model.view(), camera, job.settings, &progress);
       seconds += render.seconds;
     }
     render.seconds = seconds / job.frames;

@@ -6,8 +6,8 @@
 
 #include <cstdint>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/model_view.h"
-#include "gwnrt/hd.h"
 #include "gwnrt/trace/surface_trace.h"
 #include "render/camera.h"
 #include "render/shading.h"

@@ -10,7 +10,7 @@
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
 #include "apps/common/progress_bar.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 #include "render/image_output.h"
 #include "render/render_program.h"
 #include "render/tiles.h"

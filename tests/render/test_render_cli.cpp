@@ -12,7 +12,7 @@
 #include "../cli_util.h"
 #include "../mesh_files.h"
 #include "../test_util.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 
 namespace gwnrt {
 namespace {

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "../test_util.h"
-#include "gwnrt/batch.h"
+#include "gwnrt/query/batch.h"
 
 namespace gwnrt {
 namespace {

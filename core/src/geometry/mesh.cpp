@@ -1,7 +1,11 @@
-// Checks of a mesh in memory (gwnrt/geometry/mesh.h).
+// Checks of a mesh in memory, and of the scales gwnrt serves (gwnrt/geometry/mesh.h).
 #include "gwnrt/geometry/mesh.h"
 
-#include "message.h"
+#include <algorithm>
+#include <cmath>
+
+#include "base/message.h"
+#include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
 
@@ -71,6 +75,43 @@ Status validate_mesh(const Mesh& mesh, const std::string& source) {
   }
   if (mesh.triangles.empty()) return {StatusCode::kInvalidMesh, cat(source, ": the mesh has no triangles")};
   return validate_attributes(mesh, source);
+}
+
+Status check_mesh_scale(const Mesh& mesh) {
+  float largest = 0.0f;
+  size_t largest_vertex = 0;
+  Aabb box;
+  for (const uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const vec3& p = mesh.positions[t[k]];
+      box.extend(p);
+      const float m = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+      if (m > largest) {
+        largest = m;
+        largest_vertex = t[k];
+      }
+    }
+  const vec3 extent = box.hi - box.lo;
+  const float across = std::max({extent.x, extent.y, extent.z});
+  const std::string range = cat("gwnrt computes in float and serves meshes whose coordinates lie within +-",
+                                kMaxMeshCoordinate, " and whose box is at least ", kMinMeshExtent, " across");
+  if (largest > kMaxMeshCoordinate)
+    return {StatusCode::kInvalidMesh,
+            cat("mesh: vertex ", largest_vertex, " (counting from 0) has a coordinate of magnitude ", largest, "; ",
+                range, ": scale the mesh down")};
+  const double diagonal = glm::length(dvec3(extent));  // in double: squares of tiny extents underflow in float
+  if (!mesh.triangles.empty() && diagonal < double(kMinMeshExtentPerCoordinate) * largest)
+    return {StatusCode::kInvalidMesh,
+            cat("mesh: its box is ", float(diagonal), " across (diagonal) at ", largest, " from the origin (vertex ",
+                largest_vertex, ", counting from 0), where float coordinates step by ",
+                std::nextafter(largest, kMaxMeshCoordinate * 2.0f) - largest,
+                "; gwnrt computes in float and needs the box's diagonal to be at least ", kMinMeshExtentPerCoordinate,
+                " of its largest coordinate: translate the mesh near the origin",
+                across < kMinMeshExtent ? cat(" (and scale it up: its box is below ", kMinMeshExtent, " across)")
+                                        : std::string())};
+  if (!mesh.triangles.empty() && across < kMinMeshExtent)
+    return {StatusCode::kInvalidMesh, cat("mesh: its box is ", across, " across; ", range, ": scale the mesh up")};
+  return Status::Ok();
 }
 
 }  // namespace gwnrt

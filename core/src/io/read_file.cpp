@@ -9,9 +9,9 @@
 #include <memory>
 #include <system_error>
 
-#include "gwnrt/io/memory.h"
+#include "base/message.h"
+#include "gwnrt/base/memory.h"
 #include "io/text.h"
-#include "message.h"
 
 namespace gwnrt {
 

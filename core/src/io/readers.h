@@ -14,9 +14,9 @@
 #include <string_view>
 #include <vector>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/mesh_io.h"
-#include "gwnrt/status.h"
 
 namespace gwnrt::io {
 

@@ -10,9 +10,9 @@
 #include <type_traits>
 #include <vector>
 
+#include "base/message.h"
+#include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/status.h"
-#include "message.h"
 
 namespace gwnrt::io {
 

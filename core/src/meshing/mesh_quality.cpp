@@ -19,12 +19,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "gwnrt/batch.h"
+#include "base/message.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/geometry/bvh.h"
+#include "gwnrt/geometry/exact_predicates.h"
 #include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/query/batch.h"
 #include "meshing/disjoint_sets.h"
-#include "message.h"
 
 namespace gwnrt {
 namespace {

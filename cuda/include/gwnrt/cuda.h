@@ -8,10 +8,10 @@
 #include <span>
 #include <string>
 
-#include "gwnrt/batch.h"
-#include "gwnrt/geometry/model.h"
 #include "gwnrt/meshing/extract_surface.h"
-#include "gwnrt/sdf/point_columns.h"
+#include "gwnrt/model/model.h"
+#include "gwnrt/query/batch.h"
+#include "gwnrt/query/point_columns.h"
 
 struct CUstream_st;  // cudaStream_t is a CUstream_st*: streams pass without CUDA's headers
 

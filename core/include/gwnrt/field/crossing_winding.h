@@ -9,7 +9,7 @@
 
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/model_view.h"
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 
 namespace gwnrt {
 

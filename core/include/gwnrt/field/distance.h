@@ -2,7 +2,7 @@
 // boundary curve ∂M, by near-first traversal of the wide BVH. Host-and-device.
 #pragma once
 
-#include "gwnrt/field/lanes.h"
+#include "gwnrt/base/lanes.h"
 #include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {

@@ -16,8 +16,8 @@
 // so that is what the tree stores. ∇ₓΩ = -∇_d Ω and Hₓ Ω = H_d Ω (d = p̄ - x).
 #pragma once
 
-#include "gwnrt/field/lanes.h"
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
+#include "gwnrt/base/lanes.h"
 
 namespace gwnrt {
 

@@ -3,8 +3,8 @@
 // brute-force reference. Host-and-device.
 #pragma once
 
-#include "gwnrt/field/lanes.h"
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
+#include "gwnrt/base/lanes.h"
 
 namespace gwnrt {
 

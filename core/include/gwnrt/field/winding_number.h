@@ -5,7 +5,7 @@
 #include <array>
 #include <type_traits>
 
-#include "gwnrt/field/lanes.h"
+#include "gwnrt/base/lanes.h"
 #include "gwnrt/field/multipole.h"
 #include "gwnrt/field/solid_angle.h"
 #include "gwnrt/geometry/bvh.h"
@@ -223,7 +223,7 @@ GWNRT_FORCEINLINE void visit_multipole_lanes(const TriangleTreeView& tree, const
 // once); the triangles of nearer leaves to visitor.near(t, p0, p1, p2), t its leaf-order index;
 // nearer inner clusters are opened. A scalar visitor may leave out near clusters it knows add
 // nothing (visitor.skip_near(node, lane) true: the sheet classification's clusters that lie in
-// the plane of x and do not contain it, core/src/build/sheets.cpp).
+// the plane of x and do not contain it, core/src/sdf/sheets.cpp).
 template <class Visitor>
 GWNRT_HD GWNRT_FORCEINLINE void visit_multipole(const TriangleTreeView& tree, const vec3& x, float beta,
                                                 Visitor& visitor) {

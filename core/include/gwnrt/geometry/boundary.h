@@ -1,5 +1,5 @@
 // The boundary curve ∂M, its loops, and the cone C over it (built in
-// core/src/build/boundary.cpp; docs/design.md §3).
+// core/src/geometry/boundary.cpp; docs/design.md §3).
 #pragma once
 
 #include <cstdint>

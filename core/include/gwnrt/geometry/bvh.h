@@ -9,8 +9,8 @@
 #include <span>
 #include <vector>
 
-#include "gwnrt/hd.h"
-#include "gwnrt/status.h"
+#include "gwnrt/base/hd.h"
+#include "gwnrt/base/status.h"
 
 namespace gwnrt {
 

@@ -1,4 +1,4 @@
-// A wide BVH over line segments (built in core/src/build/segment_tree.cpp): the tree over ∂M
+// A wide BVH over line segments (built in core/src/geometry/segment_tree.cpp): the tree over ∂M
 // that serves the distance to the boundary.
 #pragma once
 

@@ -1,5 +1,5 @@
 // The multipole triangle tree: a wide BVH over triangles with the Taylor moments of every lane
-// (built in core/src/build/triangle_tree.cpp). The same tree serves M, the cone over ∂M and the
+// (built in core/src/geometry/triangle_tree.cpp). The same tree serves M, the cone over ∂M and the
 // sheets.
 #pragma once
 

@@ -4,8 +4,8 @@
 #include <cstddef>
 #include <string>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
-#include "gwnrt/status.h"
 
 namespace gwnrt {
 

@@ -1,4 +1,4 @@
-// Writing a SurfaceMesh (the mesher's output) to binary PLY or OBJ (core/src/io/write_mesh.cpp).
+// Writing a SurfaceMesh (the mesher's output) to binary PLY or OBJ (core/src/io/mesh_writer.cpp).
 //
 // PLY is the complete format: it keeps every per-vertex array SurfaceMesh has, in binary so
 // that a file read back holds the very floats that were written. OBJ is for tools that read
@@ -18,8 +18,8 @@
 
 #include <string>
 
-#include "gwnrt/meshing/surface_mesh.h"
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
+#include "gwnrt/geometry/surface_mesh.h"
 
 namespace gwnrt {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 
 namespace gwnrt {
 
@@ -26,7 +26,7 @@ struct ReadLimits {
   // A line (the bytes before a '\n') longer than this ends the read with an error naming the
   // line. Lines are checked as they arrive, so a stream without newlines is not buffered past it.
   uint64_t max_line_bytes = kMaxMeshLineBytes;
-  // More bytes than this end the read with an error; 0: available_memory_bytes() (gwnrt/io/memory.h)
+  // More bytes than this end the read with an error; 0: available_memory_bytes() (gwnrt/base/memory.h)
   // when the read starts.
   uint64_t max_bytes = 0;
   // For files whose tail may be binary (a PLY's body): called with the bytes read so far, returns

@@ -13,11 +13,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/surface_mesh.h"
 #include "gwnrt/geometry/triangle_tree.h"
-#include "gwnrt/meshing/surface_mesh.h"
-#include "gwnrt/status.h"
 
 namespace gwnrt {
 

@@ -8,7 +8,7 @@
 #include <array>
 #include <cstdint>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt {
 

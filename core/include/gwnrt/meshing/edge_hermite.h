@@ -5,7 +5,7 @@
 
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
-#include "gwnrt/trace/ray.h"
+#include "gwnrt/geometry/ray.h"
 
 namespace gwnrt {
 

@@ -8,10 +8,10 @@
 #include <string>
 #include <string_view>
 
+#include "gwnrt/base/status.h"
 #include "gwnrt/field/evaluate_winding.h"
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/meshing/surface_mesh.h"
-#include "gwnrt/status.h"
+#include "gwnrt/geometry/surface_mesh.h"
+#include "gwnrt/model/model.h"
 
 namespace gwnrt {
 

@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <span>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt {
 

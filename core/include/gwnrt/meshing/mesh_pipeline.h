@@ -5,7 +5,7 @@
 // parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total, to_host(array, i)
 // for the few values the driver reads back, and move_out(array, std::vector&) for the output.
 // Every function the driver hands to parallel_for is a GWNRT_HD functor or a GWNRT_PASS lambda
-// (hd.h); it never touches host memory from inside one (the output is moved out whole).
+// (base/hd.h); it never touches host memory from inside one (the output is moved out whole).
 #pragma once
 
 #include <algorithm>
@@ -13,10 +13,10 @@
 #include <cmath>
 #include <string>
 
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 #include "gwnrt/meshing/dual_contouring.h"
 #include "gwnrt/meshing/extract_surface.h"
+#include "gwnrt/model/model.h"
 #include "gwnrt/trace/march_regions.h"
 
 namespace gwnrt {

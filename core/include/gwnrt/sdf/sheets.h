@@ -1,13 +1,13 @@
 // Sheet classification: which triangles are pieces of S for a level (computed in
-// core/src/build/sheets.cpp; docs/design.md §4).
+// core/src/sdf/sheets.cpp; docs/design.md §4).
 #pragma once
 
 #include <cstdint>
 #include <span>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/triangle_tree.h"
-#include "gwnrt/hd.h"
 
 namespace gwnrt {
 

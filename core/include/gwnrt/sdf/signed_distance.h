@@ -8,8 +8,8 @@
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/trace/harnack.h"
+#include "gwnrt/trace/march_regions.h"
 #include "gwnrt/trace/phase.h"
-#include "gwnrt/trace/surface_trace.h"
 
 namespace gwnrt {
 

@@ -5,7 +5,7 @@
 // (surface_trace.h); what a step needs at a point is phase.h. Host-and-device.
 #pragma once
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt {
 

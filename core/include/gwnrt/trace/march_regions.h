@@ -5,8 +5,8 @@
 
 #include <cfloat>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/model_view.h"
-#include "gwnrt/hd.h"
 #include "gwnrt/trace/trace_types.h"
 
 namespace gwnrt {

@@ -16,10 +16,10 @@
 
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/model_view.h"
+#include "gwnrt/geometry/ray.h"
 #include "gwnrt/trace/harnack.h"
 #include "gwnrt/trace/march_regions.h"
 #include "gwnrt/trace/phase.h"
-#include "gwnrt/trace/ray.h"
 #include "gwnrt/trace/trace_types.h"
 
 namespace gwnrt {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "gwnrt/base/hd.h"
 #include "gwnrt/geometry/bvh.h"
-#include "gwnrt/hd.h"
 
 namespace gwnrt {
 
@@ -26,7 +26,7 @@ struct TraceOptions {
   bool exact = false;  // φ by the double brute-force sum over the cone (reference, slow)
 };
 
-// The values validate_trace_options (batch.h) accepts, option by option: it checks with these,
+// The values validate_trace_options (query/validation.h) accepts, option by option: it checks with these,
 // and a program checks its flags with them, so that a bad value is refused by the flag's name
 // before anything is loaded (the library's own message cannot name a flag).
 inline bool trace_level_valid(float level) { return std::isfinite(level); }

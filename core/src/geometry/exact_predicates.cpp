@@ -1,5 +1,5 @@
 // Exact orientation predicates on float coordinates, and the triangle-pair test of the
-// self-intersection count built on them (gwnrt/meshing/mesh_quality.h).
+// self-intersection count built on them (gwnrt/geometry/exact_predicates.h).
 //
 // Each predicate is first evaluated in double with a forward error bound (Shewchuk's bounds for
 // the plain evaluation, rounded up); only when the result is within the bound of 0 (coplanar
@@ -16,7 +16,7 @@
 // rounding, which the bounds (one relative error ε per operation, at most) still cover.
 #include <cmath>
 
-#include "gwnrt/meshing/mesh_quality.h"
+#include "gwnrt/geometry/exact_predicates.h"
 
 namespace gwnrt::exact {
 namespace {

@@ -10,8 +10,7 @@
 // so the counts are those of an honest ray and w stays consistent.
 #pragma once
 
-#include "gwnrt/field/distance.h"
-#include "gwnrt/field/lanes.h"
+#include "gwnrt/base/lanes.h"
 #include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {

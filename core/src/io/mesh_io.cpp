@@ -1,4 +1,6 @@
 // load_mesh (gwnrt/io/mesh_io.h): the reader chosen by the extension, then validate_mesh.
+#include "gwnrt/io/mesh_io.h"
+
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
@@ -6,8 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "gwnrt/geometry/model.h"
-#include "gwnrt/io/mesh_io.h"
+#include "gwnrt/geometry/mesh.h"
 #include "gwnrt/io/read_file.h"
 #include "io/readers.h"
 #include "io/text.h"

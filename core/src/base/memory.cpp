@@ -1,7 +1,7 @@
-// Available memory and the size checks (gwnrt/io/memory.h). Linux only reads what /proc and
+// Available memory and the size checks (gwnrt/base/memory.h). Linux only reads what /proc and
 // /sys say; elsewhere the memory is unknown and every check passes (std::bad_alloc, caught by
 // guard_status, is then the only guard).
-#include "gwnrt/io/memory.h"
+#include "gwnrt/base/memory.h"
 
 #include <sys/resource.h>
 #include <unistd.h>

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "gwnrt/sdf/point_query.h"
+#include "gwnrt/query/point_query.h"
 
 namespace gwnrt {
 

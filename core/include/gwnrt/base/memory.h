@@ -1,5 +1,5 @@
 // What an allocation sized by input (a file, a header's count, an image or point count) would
-// need, against what the system can give now (definitions: core/src/io/memory.cpp). Checked
+// need, against what the system can give now (definitions: core/src/base/memory.cpp). Checked
 // before allocating: with Linux's overcommit a huge allocation often succeeds and the process is
 // killed later, when its pages are touched, and elsewhere it ends in std::bad_alloc; either way
 // the user learns nothing about the size they asked for (docs/design.md §8).
@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 
-#include "gwnrt/status.h"
+#include "gwnrt/base/status.h"
 
 namespace gwnrt {
 

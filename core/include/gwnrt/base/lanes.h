@@ -7,7 +7,7 @@
 
 #include <cstdint>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 #if !defined(__CUDACC__) && defined(__GNUC__)
 #define GWNRT_HOST_LANES 1
@@ -135,7 +135,7 @@ GWNRT_FORCEINLINE bool lane_any(M m) {
 }
 
 // Four doubles, where the CPU has 256-bit registers: exact products of floats (the ray's edge
-// functions, trace/ray.h) four at a time. Without AVX the callers keep their scalar loops.
+// functions, geometry/ray.h) four at a time. Without AVX the callers keep their scalar loops.
 #if defined(__AVX__)
 typedef double d4 __attribute__((vector_size(32)));
 typedef int64_t l4 __attribute__((vector_size(32)));

@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#include "gwnrt/field/multipole.h"
 #include "gwnrt/geometry/triangle_tree.h"
 
 namespace gwnrt {

@@ -7,9 +7,9 @@
 #include <mutex>
 #include <string>
 
-#include "gwnrt/geometry/model.h"
+#include "base/message.h"
+#include "gwnrt/model/model.h"
 #include "gwnrt/sdf/sheets.h"
-#include "message.h"
 
 namespace gwnrt {
 namespace {
@@ -82,43 +82,6 @@ std::string level_out_of_reach_message(uint32_t triangle_count, float level) {
   std::snprintf(text, sizeof text, "%g", double(level));
   return cat("level ", std::string_view(text), " lies outside every value w takes on this mesh (|w| < ", triangle_count,
              "/2): S is empty");
-}
-
-Status check_mesh_scale(const Mesh& mesh) {
-  float largest = 0.0f;
-  size_t largest_vertex = 0;
-  Aabb box;
-  for (const uvec3& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const vec3& p = mesh.positions[t[k]];
-      box.extend(p);
-      const float m = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-      if (m > largest) {
-        largest = m;
-        largest_vertex = t[k];
-      }
-    }
-  const vec3 extent = box.hi - box.lo;
-  const float across = std::max({extent.x, extent.y, extent.z});
-  const std::string range = cat("gwnrt computes in float and serves meshes whose coordinates lie within +-",
-                                kMaxMeshCoordinate, " and whose box is at least ", kMinMeshExtent, " across");
-  if (largest > kMaxMeshCoordinate)
-    return {StatusCode::kInvalidMesh,
-            cat("mesh: vertex ", largest_vertex, " (counting from 0) has a coordinate of magnitude ", largest, "; ",
-                range, ": scale the mesh down")};
-  const double diagonal = glm::length(dvec3(extent));  // in double: squares of tiny extents underflow in float
-  if (!mesh.triangles.empty() && diagonal < double(kMinMeshExtentPerCoordinate) * largest)
-    return {StatusCode::kInvalidMesh,
-            cat("mesh: its box is ", float(diagonal), " across (diagonal) at ", largest, " from the origin (vertex ",
-                largest_vertex, ", counting from 0), where float coordinates step by ",
-                std::nextafter(largest, kMaxMeshCoordinate * 2.0f) - largest,
-                "; gwnrt computes in float and needs the box's diagonal to be at least ", kMinMeshExtentPerCoordinate,
-                " of its largest coordinate: translate the mesh near the origin",
-                across < kMinMeshExtent ? cat(" (and scale it up: its box is below ", kMinMeshExtent, " across)")
-                                        : std::string())};
-  if (!mesh.triangles.empty() && across < kMinMeshExtent)
-    return {StatusCode::kInvalidMesh, cat("mesh: its box is ", across, " across; ", range, ": scale the mesh up")};
-  return Status::Ok();
 }
 
 struct GwnModel::Deferral {

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "gwnrt/hd.h"
+#include "gwnrt/base/hd.h"
 
 namespace gwnrt {
 

@@ -5,11 +5,11 @@
 
 #include <tbb/parallel_for.h>
 
+#include "gwnrt/base/symmetric_eigen.h"
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/field/solid_angle.h"
 #include "gwnrt/field/winding_number.h"
 #include "gwnrt/geometry/triangle_tree.h"
-#include "gwnrt/meshing/qef.h"
 #include "gwnrt/sdf/sheets.h"
 
 namespace gwnrt {

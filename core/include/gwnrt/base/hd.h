@@ -134,6 +134,14 @@ GWNRT_HD GWNRT_FORCEINLINE int lowest_set_bit(uint32_t mask) {
 #endif
 }
 
+GWNRT_HD inline int bit_count(uint32_t v) {
+#if defined(__CUDA_ARCH__)
+  return __popc(v);
+#else
+  return __builtin_popcount(v);
+#endif
+}
+
 GWNRT_HD inline bool is_nan(float x) { return !is_finite(x) && x != kInfinity && x != -kInfinity; }
 
 }  // namespace gwnrt

@@ -15,8 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "base/message.h"
 #include "gwnrt/io/mesh_writer.h"
-#include "message.h"
 
 namespace gwnrt {
 namespace {
