@@ -117,8 +117,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   if (const auto status = apps::parse_command_line(app, argc, argv)) return *status;
-  bool use_cuda = false;
-  if (Status s = apps::choose_device(kProgram, device, use_cuda); !s.ok()) return apps::fail(kProgram, s.message());
+  Device where = Device::kCpu;
+  if (Status s = apps::choose_device(kProgram, device, where); !s.ok()) return apps::fail(kProgram, s.message());
 
   // Checked before the mesh is loaded: the points, their subset for the brute force, the two
   // result arrays and the w column.
@@ -165,8 +165,10 @@ int main(int argc, char** argv) {
   for (const vec3& p : mesh.positions) box.extend(p);
   const double sheets_by_crossing = sheet_seconds(mesh, WindingMethod::kCrossing);
   const double sheets_by_taylor = sheet_seconds(mesh, WindingMethod::kTaylor);
-  GwnModel model;
-  if (Status s = GwnModel::build(std::move(mesh), model); !s.ok()) return apps::fail(kProgram, s.message());
+  GwnModel built;
+  if (Status s = GwnModel::build(std::move(mesh), built); !s.ok()) return apps::fail(kProgram, s.message());
+  const Engine engine(std::move(built));
+  const GwnModel& model = engine.model();
   const ModelView view = model.view();
   const WindingMethod auto_method = resolve_winding_method(view, WindingMethod::kAuto);
   const size_t tris = model.mesh().triangles.size();
@@ -190,31 +192,24 @@ int main(int argc, char** argv) {
   const std::vector<vec3> points = point_mix(box, count, seed);
   std::vector<PointResult> results, reference;
   const Evaluate on_cpu = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
-    return evaluate_points(model, p, q, r);
+    return engine.evaluate_points(Device::kCpu, p, q, r);
   };
-  Evaluate evaluate = on_cpu;
-  EvaluateColumns evaluate_columns = [&](std::span<const vec3> p, const QueryRequest& q, const PointColumns& c) {
-    return evaluate_points_to_columns(model, p, q, c);
+  DeviceTimings device_timings;
+  const Evaluate evaluate = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
+    return engine.evaluate_points(where, p, q, r, nullptr, &device_timings);
   };
-#if defined(GWNRT_HAVE_CUDA)
-  cuda::BatchTimings device_timings;
-  cuda::DeviceModel device_model;
-  if (use_cuda) {
+  const EvaluateColumns evaluate_columns = [&](std::span<const vec3> p, const QueryRequest& q, const PointColumns& c) {
+    return engine.evaluate_points_to_columns(where, p, q, c, nullptr, &device_timings);
+  };
+  if (where == Device::kCuda) {
     const auto tu = clock_type::now();
-    if (Status s = cuda::DeviceModel::upload(model, device_model); !s.ok()) return apps::fail(kProgram, s.message());
-    evaluate = [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
-      return cuda::evaluate_points(device_model, p, q, r, nullptr, &device_timings);
-    };
-    evaluate_columns = [&](std::span<const vec3> p, const QueryRequest& q, const PointColumns& c) {
-      return cuda::evaluate_points_to_columns(device_model, p, q, c, nullptr, &device_timings);
-    };
+    if (Status s = engine.upload(); !s.ok()) return apps::fail(kProgram, s.message());
     // The first launch pays for the context and the scratch: not in any mode's time.
     std::vector<PointResult> warm(points.size());
     if (Status s = evaluate(points, QueryRequest{}, warm); !s.ok()) return apps::fail(kProgram, s.message());
     std::printf("device          cuda (upload %.3f s, then a warm-up batch)\n\n",
                 std::chrono::duration<double>(clock_type::now() - tu).count());
   }
-#endif
 
   // Brute force: grow the subset until it fills the time budget (its cost is O(n) per point).
   QueryRequest brute;
@@ -276,9 +271,7 @@ int main(int argc, char** argv) {
       sec = time_batch(evaluate, points, request, results);
     }
     Row row{m.name, points.size(), sec};
-#if defined(GWNRT_HAVE_CUDA)
-    if (use_cuda) row.kernel_seconds = device_timings.kernel;
-#endif
+    if (where == Device::kCuda) row.kernel_seconds = device_timings.kernel;
     if (m.fields & kFieldW) {
       row.max_error = 0;
       for (size_t i = 0; i < brute_n; ++i)
@@ -342,7 +335,7 @@ int main(int argc, char** argv) {
     out["boundary_segments"] = model.boundary().segment_count();
     out["cone_triangles"] = view.cone.triangle_count;
     out["threads"] = workers;
-    out["device"] = use_cuda ? "cuda" : "cpu";
+    out["device"] = device_name(where);
     out["beta"] = beta;
     out["auto_method"] = winding_method_name(auto_method);
     out["build"] = {{"load_seconds", load_sec},

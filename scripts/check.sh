@@ -80,6 +80,7 @@ check_downstream() {
   cmake -S tests/downstream -B build-downstream/app -G Ninja -DCMAKE_PREFIX_PATH="$prefix"
   cmake --build build-downstream/app --parallel "$jobs"
   build-downstream/app/library_example data/bunny.obj
+  build-downstream/app/engine_example data/bunny.obj
   [ -x build-downstream/app/embree_example ] && build-downstream/app/embree_example data/bunny_holes.obj
   [ -x build-downstream/app/cuda_example ] && build-downstream/app/cuda_example data/bunny.obj
   # The Python package, when built: installed under the prefix and importable from there alone.

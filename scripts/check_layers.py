@@ -18,17 +18,20 @@ import sys
 CORE_LAYERS = ["base", "geometry", "io", "field", "trace", "sdf", "model", "query", "meshing"]
 
 # Top-level folder -> what its files may include: "core" (any gwnrt/<layer>/ header), "cuda"
-# (gwnrt/cuda.h), "embree" (gwnrt/embree.h), or another top-level folder by its root path.
+# (gwnrt/cuda.h), "engine" (gwnrt/engine.h), "embree" (gwnrt/embree.h), or another top-level
+# folder by its root path. Only cuda/ and engine/ choose the device; the rest ask the engine.
 ALLOWED = {
     "cuda": {"core", "cuda"},
+    "engine": {"core", "cuda", "engine"},
     "plugin": {"core", "embree"},
-    "python": {"core", "cuda"},
+    "python": {"core", "engine"},
     "reference": {"core", "reference"},
-    "render": {"core", "cuda", "embree", "render", "apps"},
-    "apps": {"core", "cuda", "apps", "render", "reference"},
-    "bench": {"core", "cuda", "apps", "render", "reference"},
-    "examples": {"core", "cuda", "embree"},
-    "tests": {"core", "cuda", "embree", "apps", "render", "reference", "tests"},
+    # render/'s kernel file reads gwnrt/cuda.h; its host code reaches the GPU through the engine.
+    "render": {"core", "cuda", "engine", "embree", "render", "apps"},
+    "apps": {"core", "engine", "apps", "render", "reference"},
+    "bench": {"core", "engine", "apps", "render", "reference"},
+    "examples": {"core", "cuda", "engine", "embree"},
+    "tests": {"core", "cuda", "engine", "embree", "apps", "render", "reference", "tests"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 
@@ -52,6 +55,8 @@ def included_kind(name):
             return ("cuda", None)
         if rest == "embree.h":
             return ("embree", None)
+        if rest == "engine.h":
+            return ("engine", None)
         return ("core", rest.split("/")[0])
     top = name.split("/")[0]
     if top in ALLOWED or top == "core":

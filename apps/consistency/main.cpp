@@ -28,17 +28,14 @@
 #include "apps/common/load_model.h"
 #include "apps/common/point_io.h"
 #include "apps/common/program.h"
+#include "gwnrt/engine.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_comparison.h"
 #include "gwnrt/query/batch.h"
 #include "reference/point_mix.h"
 #include "render/camera.h"
-#include "render/integrators/first_hit_pixel.h"
-
-#if defined(GWNRT_HAVE_CUDA)
-#include "gwnrt/cuda.h"
 #include "render/integrators/first_hit_cuda.h"
-#endif
+#include "render/integrators/first_hit_pixel.h"
 
 namespace {
 
@@ -70,28 +67,42 @@ struct Backend {
       first_hit;
 };
 
-Backend cpu_backend(const GwnModel& model) {
-  return {
-      "cpu",
-      [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
-        return evaluate_points(model, p, q, r);
-      },
-      [&](std::span<const Ray> r, const TraceOptions& o, std::span<RayHit> h) { return trace_rays(model, r, o, h); },
-      [&](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) { return extract_surface(model, o, m, &s); },
-      [&](const render::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
-          std::vector<render::FirstHitSample>& pixels, double& seconds) {
-        const ModelView view = model.view();
-        pixels.resize(size_t(camera.width) * size_t(camera.height));
-        const auto t0 = std::chrono::steady_clock::now();
-        for (int f = 0; f < frames; ++f)
-          tbb::parallel_for(0, camera.height, [&](int y) {
-            for (int x = 0; x < camera.width; ++x)
-              pixels[size_t(y) * size_t(camera.width) + size_t(x)] =
-                  render::first_hit_pixel(view, camera, settings, x, y);
-          });
-        seconds = seconds_since(t0) / frames;
-        return Status::Ok();
-      }};
+// The batches of `engine` on `device` (kCpu or kCuda), and gwnrt-render's first-hit pixels there.
+Backend backend_on(const Engine& engine, Device device) {
+  Backend b{device_name(device),
+            [&engine, device](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
+              return engine.evaluate_points(device, p, q, r);
+            },
+            [&engine, device](std::span<const Ray> r, const TraceOptions& o, std::span<RayHit> h) {
+              return engine.trace_rays(device, r, o, h);
+            },
+            [&engine, device](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) {
+              return engine.extract_surface(device, o, m, &s);
+            },
+            {}};
+  if (device == Device::kCuda) {
+    b.first_hit = [&engine](const render::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
+                            std::vector<render::FirstHitSample>& pixels, double& seconds) {
+      const cuda::DeviceModel* model = nullptr;
+      if (Status s = engine.device_model(model); !s.ok()) return s;
+      return render::render_first_hit_cuda(*model, camera, settings, frames, pixels, seconds);
+    };
+    return b;
+  }
+  b.first_hit = [&engine](const render::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
+                          std::vector<render::FirstHitSample>& pixels, double& seconds) {
+    const ModelView view = engine.model().view();
+    pixels.resize(size_t(camera.width) * size_t(camera.height));
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int f = 0; f < frames; ++f)
+      tbb::parallel_for(0, camera.height, [&](int y) {
+        for (int x = 0; x < camera.width; ++x)
+          pixels[size_t(y) * size_t(camera.width) + size_t(x)] = render::first_hit_pixel(view, camera, settings, x, y);
+      });
+    seconds = seconds_since(t0) / frames;
+    return Status::Ok();
+  };
+  return b;
 }
 
 // One quantity's comparison: per item a difference already scaled so that the tolerance applies
@@ -403,19 +414,11 @@ int main(int argc, char** argv) {
   if (const auto status = apps::parse_command_line(app, argc, argv, kExitError)) return *status;
 
   if (against == "cuda") {
-#if defined(GWNRT_HAVE_CUDA)
-    std::string why;
-    if (!cuda::device_available(&why)) {
-      std::fprintf(stderr, "%s: no usable GPU, nothing to compare: %s\n", kProgram, why.c_str());
+    DeviceChoice gpu;
+    if (Status s = choose_device(Device::kCuda, gpu); !s.ok()) {
+      std::fprintf(stderr, "%s: no usable GPU, nothing to compare: %s\n", kProgram, s.message().c_str());
       return kExitNoGpu;
     }
-#else
-    std::fprintf(stderr,
-                 "%s: no usable GPU, nothing to compare: this %s was built without the CUDA backend (reconfigure with "
-                 "-DGWNRT_WITH_CUDA=ON on a machine with the CUDA toolkit)\n",
-                 kProgram, kProgram);
-    return kExitNoGpu;
-#endif
   }
   if (meshes.empty())
     for (const char* m : {"bunny.obj", "bunny_holes.obj", "teapot.obj"})
@@ -455,31 +458,15 @@ int main(int argc, char** argv) {
     }
     const std::vector<vec3>& points = origin != dvec3(0.0) ? moved_points : given_points;
     const std::vector<Ray>& rays = origin != dvec3(0.0) ? moved_rays : given_rays;
-    const Backend cpu = cpu_backend(model);
-    Backend other = cpu;
-#if defined(GWNRT_HAVE_CUDA)
-    cuda::DeviceModel device;
+    const Engine engine(std::move(model));
+    const Backend cpu = backend_on(engine, Device::kCpu);
+    const Backend other = backend_on(engine, against == "cuda" ? Device::kCuda : Device::kCpu);
     if (against == "cuda") {
-      if (Status s = cuda::DeviceModel::upload(model, device); !s.ok()) return error(path + ": " + s.message());
-      other = {"cuda",
-               [&](std::span<const vec3> p, const QueryRequest& q, std::span<PointResult> r) {
-                 return cuda::evaluate_points(device, p, q, r);
-               },
-               [&](std::span<const Ray> r, const TraceOptions& o, std::span<RayHit> h) {
-                 return cuda::trace_rays(device, r, o, h);
-               },
-               [&](const MeshingOptions& o, SurfaceMesh& m, MeshingStats& s) {
-                 return cuda::extract_surface(device, model, o, m, &s);
-               },
-               [&](const render::PinholeCamera& camera, const render::FirstHitSettings& settings, int frames,
-                   std::vector<render::FirstHitSample>& pixels, double& seconds) {
-                 return render::render_first_hit_cuda(device, camera, settings, frames, pixels, seconds);
-               }};
+      if (Status s = engine.upload(); !s.ok()) return error(path + ": " + s.message());
     }
-#endif
     if (Status s =
             compare_mesh(path, cpu, other, points_path.empty() ? nullptr : &points, rays_path.empty() ? nullptr : &rays,
-                         count, resolution, image_width, image_height, model, rows);
+                         count, resolution, image_width, image_height, engine.model(), rows);
         !s.ok())
       return error(s.message());
   }

@@ -167,15 +167,12 @@ int main(int argc, char** argv) {
   if (resolution && *resolution == 0) return fail(kProgram, "--resolution must be at least 1");
   (void)gwnrt::meshing_method_named(method, options.method);  // --method's check took only these names
   if (Status s = parse_attributes(attributes, options.attributes); !s.ok()) return fail(kProgram, s.message());
-  bool use_cuda = false;
-  if (Status s = gwnrt::apps::choose_device(kProgram, device, use_cuda); !s.ok()) return fail(kProgram, s.message());
+  gwnrt::Device where = gwnrt::Device::kCpu;
+  if (Status s = gwnrt::apps::choose_device(kProgram, device, where); !s.ok()) return fail(kProgram, s.message());
   // The mesher refuses a grid beyond its budget, saying what it would need; a budget beyond the
   // memory available would let the kernel kill the process instead (issue 15), or on the GPU
   // fail an allocation half-way.
-  uint64_t available = gwnrt::available_memory_bytes();
-#if defined(GWNRT_HAVE_CUDA)
-  if (use_cuda) available = gwnrt::cuda::free_device_memory();
-#endif
+  const uint64_t available = gwnrt::Engine().available_memory(where);
   const bool budget_is_available_memory = available < options.memory_budget;
   if (budget_is_available_memory) options.memory_budget = available;
   const gwnrt::apps::ThreadLimit thread_limit(threads);
@@ -206,18 +203,16 @@ int main(int argc, char** argv) {
   Status s;
   double upload_seconds = 0;
   auto t0 = std::chrono::steady_clock::now();
-  if (use_cuda) {
-#if defined(GWNRT_HAVE_CUDA)
+  const gwnrt::Engine engine(std::move(model));
+  if (where == gwnrt::Device::kCuda) {
     // Timed apart: the mesher's time is after the upload (the sheets are classified before it).
-    gwnrt::cuda::DeviceModel device_model;
-    s = gwnrt::cuda::DeviceModel::upload(model, device_model);
+    s = engine.upload();
     upload_seconds = seconds_since(t0);
     t0 = std::chrono::steady_clock::now();
-    if (s.ok()) s = gwnrt::cuda::extract_surface(device_model, model, options, out, &stats);
-#endif
+    if (s.ok()) s = engine.extract_surface(where, options, out, &stats);
   } else {
     gwnrt::apps::ProgressBar bar(done, total, "items");
-    s = gwnrt::extract_surface(model, options, out, &stats);
+    s = engine.extract_surface(where, options, out, &stats);
   }
   if (!s.ok() && s.code() == gwnrt::StatusCode::kOutOfMemory && budget_is_available_memory)
     return fail(kProgram, s.message() + " (the memory available now)");
@@ -233,9 +228,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "%s: %.3f s on the %s (+ %s%.3f s to write): %ux%ux%u cells of %g, %llu active "
                  "blocks, %zu vertices, %zu triangles\n",
-                 kProgram, mesh_seconds, use_cuda ? "GPU" : "CPU",
-                 use_cuda ? (std::to_string(upload_seconds) + " s to upload, ").c_str() : "", seconds_since(t_write),
-                 stats.grid[0], stats.grid[1], stats.grid[2], double(stats.cell_size),
+                 kProgram, mesh_seconds, where == gwnrt::Device::kCuda ? "GPU" : "CPU",
+                 where == gwnrt::Device::kCuda ? (std::to_string(upload_seconds) + " s to upload, ").c_str() : "",
+                 seconds_since(t_write), stats.grid[0], stats.grid[1], stats.grid[2], double(stats.cell_size),
                  (unsigned long long)stats.active_blocks, out.positions.size(), out.triangles.size());
   if (verbose) {
     const gwnrt::MeshingPassTimes& t = stats.seconds;
@@ -254,7 +249,7 @@ int main(int argc, char** argv) {
     // A soup's corners, and the copies a UV seam splits off, are welded by position: the
     // topology is the surface's, not the texture's.
     const bool weld = options.soup || !out.uvs.empty();
-    if (Status q = gwnrt::mesh_quality_report(model, out, distance_options, quality, weld); !q.ok())
+    if (Status q = gwnrt::mesh_quality_report(engine.model(), out, distance_options, quality, weld); !q.ok())
       return fail(kProgram, "--report: " + q.message());
     const nlohmann::json j = report_json(stats, quality, mesh_seconds, out.positions.size(), out.triangles.size());
     if (report) print_report(j);

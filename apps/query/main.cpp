@@ -32,10 +32,6 @@
 #include "gwnrt/query/batch.h"
 #include "gwnrt/query/point_query.h"
 
-#if defined(GWNRT_HAVE_CUDA)
-#include "gwnrt/cuda.h"
-#endif
-
 namespace {
 
 using gwnrt::dvec3;
@@ -260,8 +256,8 @@ int main(int argc, char** argv) {
   request.newton.tolerance = newton_tolerance;
 
   // Checked before the mesh is loaded so a large load is not wasted on a request that cannot run.
-  bool use_cuda = false;
-  if (gwnrt::Status s = gwnrt::apps::choose_device(kProgram, device, use_cuda); !s.ok())
+  gwnrt::Device where = gwnrt::Device::kCpu;
+  if (gwnrt::Status s = gwnrt::apps::choose_device(kProgram, device, where); !s.ok())
     return fail(kProgram, s.message());
 
   const gwnrt::apps::ThreadLimit thread_limit(threads);
@@ -341,28 +337,19 @@ int main(int argc, char** argv) {
     return fail(kProgram, s.message());
   std::vector<PointResult> results(points.size());
   const auto t_eval = std::chrono::steady_clock::now();
-  if (use_cuda) {
-#if defined(GWNRT_HAVE_CUDA)
-    gwnrt::cuda::DeviceModel device_model;
-    if (gwnrt::Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok())
-      return fail(kProgram, s.message());
-    if (gwnrt::Status s = gwnrt::cuda::evaluate_points(device_model, points, request, results); !s.ok()) {
-      return fail(kProgram, s.message());
-    }
-#endif
-  } else {
+  {
+    const gwnrt::Engine engine(std::move(model));
     std::atomic<size_t> progress{0};
-    gwnrt::Status s;
-    {
-      gwnrt::apps::ProgressBar bar(progress, points.size(), "pts");
-      s = gwnrt::evaluate_points(model, points, request, results, &progress);
-    }
+    std::optional<gwnrt::apps::ProgressBar> bar;  // the GPU's batch reports no progress
+    if (where == gwnrt::Device::kCpu) bar.emplace(progress, points.size(), "pts");
+    const gwnrt::Status s = engine.evaluate_points(where, points, request, results, &progress);
+    bar.reset();
     if (!s.ok()) return fail(kProgram, s.message());
   }
   if (chatty) {
     const double t = seconds_since(t_eval);
     std::fprintf(stderr, "%s: evaluated %zu points on %s in %.3f s (%.2f Mpts/s)\n", kProgram, points.size(),
-                 use_cuda ? "cuda" : "cpu", t, t > 0 ? double(points.size()) / t * 1e-6 : 0.0);
+                 gwnrt::device_name(where), t, t > 0 ? double(points.size()) / t * 1e-6 : 0.0);
   }
 
   const bool to_stdout = output_path == "-";

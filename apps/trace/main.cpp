@@ -27,10 +27,6 @@
 #include "gwnrt/model/model.h"
 #include "gwnrt/query/batch.h"
 
-#if defined(GWNRT_HAVE_CUDA)
-#include "gwnrt/cuda.h"
-#endif
-
 namespace {
 
 using gwnrt::Ray;
@@ -131,8 +127,8 @@ int main(int argc, char** argv) {
   if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(kProgram, s.message());
   const bool chatty = verbose || ::isatty(2) == 1;
 
-  bool use_cuda = false;
-  if (Status s = gwnrt::apps::choose_device(kProgram, device, use_cuda); !s.ok()) return fail(kProgram, s.message());
+  gwnrt::Device where = gwnrt::Device::kCpu;
+  if (Status s = gwnrt::apps::choose_device(kProgram, device, where); !s.ok()) return fail(kProgram, s.message());
 
   const gwnrt::apps::ThreadLimit thread_limit(threads);
 
@@ -175,20 +171,13 @@ int main(int argc, char** argv) {
 
   std::vector<RayHit> hits(rays.size());
   const auto t_trace = std::chrono::steady_clock::now();
-  if (use_cuda) {
-#if defined(GWNRT_HAVE_CUDA)
-    gwnrt::cuda::DeviceModel device_model;
-    if (Status s = gwnrt::cuda::DeviceModel::upload(model, device_model); !s.ok()) return fail(kProgram, s.message());
-    if (Status s = gwnrt::cuda::trace_rays(device_model, rays, options, hits); !s.ok())
-      return fail(kProgram, s.message());
-#endif
-  } else {
+  {
+    const gwnrt::Engine engine(std::move(model));
     std::atomic<size_t> progress{0};
-    Status s;
-    {
-      gwnrt::apps::ProgressBar bar(progress, rays.size(), "rays");
-      s = gwnrt::trace_rays(model, rays, options, hits, &progress);
-    }
+    std::optional<gwnrt::apps::ProgressBar> bar;  // the GPU's batch reports no progress
+    if (where == gwnrt::Device::kCpu) bar.emplace(progress, rays.size(), "rays");
+    const Status s = engine.trace_rays(where, rays, options, hits, &progress);
+    bar.reset();
     if (!s.ok()) return fail(kProgram, s.message());
   }
   const double trace_seconds = seconds_since(t_trace);
@@ -201,7 +190,7 @@ int main(int argc, char** argv) {
   }
   if (chatty)
     std::fprintf(stderr, "%s: %zu rays on %s in %.3f s (%.0f rays/s): %zu hits, %.1f Harnack steps per ray\n", kProgram,
-                 rays.size(), use_cuda ? "cuda" : "cpu", trace_seconds,
+                 rays.size(), gwnrt::device_name(where), trace_seconds,
                  trace_seconds > 0 ? double(rays.size()) / trace_seconds : 0.0, hit_count,
                  rays.empty() ? 0.0 : double(steps) / double(rays.size()));
   // Always said, terminal or not: a capped ray is a miss that may be wrong.

@@ -75,21 +75,13 @@ py::dict extract(const PythonModel& p, int64_t resolution, float cell_size, cons
   options.winding.taylor.order = checked_integer<int>(order, "order");
   options.winding.taylor.beta = beta;
   options.memory_budget = checked_integer<uint64_t>(memory_budget, "memory_budget (bytes)", 0, INT64_MAX);
-  const bool gpu = use_cuda(device);
+  const Device where = device_argument(device);
   SurfaceMesh mesh;
   MeshingStats stats;
   check(run_released(threads, [&] {
     std::shared_lock lock(p.level_mutex);
     options.level = level_or_default(p, level);
-#if defined(GWNRT_HAVE_CUDA)
-    if (gpu) {
-      const cuda::DeviceModel* device_model = nullptr;
-      if (Status s = p.device_model(device_model); !s.ok()) return s;
-      return cuda::extract_surface(*device_model, p.model, options, mesh, &stats);
-    }
-#endif
-    (void)gpu;
-    return extract_surface(p.model, options, mesh, &stats);
+    return p.engine.extract_surface(where, options, mesh, &stats);
   }));
   py::dict out = mesh_dict(std::move(mesh));
   out["stats"] = stats_dict(stats);

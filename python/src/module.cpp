@@ -6,7 +6,6 @@
 #include <string>
 
 #include "gwnrt/io/mesh_io.h"
-#include "gwnrt/model/model.h"
 #include "python_model.h"
 
 namespace gwnrt::python {
@@ -58,23 +57,13 @@ FloatArray float_rows(const py::handle& obj, const char* name, py::ssize_t width
   return FloatArray(any);  // converts (float64, strides, byte order) or raises, MemoryError included
 }
 
-bool cuda_usable(std::string& why) {
-#if defined(GWNRT_HAVE_CUDA)
-  return cuda::device_available(&why);
-#else
-  why = "this gwnrt module was built without the CUDA backend";
-  return false;
-#endif
-}
-
-bool use_cuda(const std::string& device) {
-  if (device == "cpu") return false;
-  if (device != "cuda" && device != "auto")
+Device device_argument(const std::string& device) {
+  Device asked = Device::kCpu;
+  if (!device_named(device, asked))
     throw py::value_error("device must be 'cpu', 'cuda' or 'auto', got '" + device + "'");
-  std::string why;
-  const bool usable = cuda_usable(why);
-  if (device == "cuda" && !usable) throw std::runtime_error("device='cuda': " + why);
-  return usable;
+  DeviceChoice chosen;
+  if (Status s = choose_device(asked, chosen); !s.ok()) throw std::runtime_error("device='cuda': " + s.message());
+  return chosen.device;
 }
 
 WindingMethod winding_method_argument(const std::string& name) {
@@ -131,23 +120,9 @@ std::vector<uint32_t> source_triangle_rows(const py::handle& obj) {
 
 float level_or_default(const PythonModel& p, std::optional<float> level) {
   if (level) return *level;
-  const float sheets = p.model.requested_sheet_level();
+  const float sheets = p.model().requested_sheet_level();
   return std::isnan(sheets) ? 0.5f : sheets;
 }
-
-#if defined(GWNRT_HAVE_CUDA)
-Status PythonModel::device_model(const cuda::DeviceModel*& out) const {
-  std::lock_guard<std::mutex> lock(device_mutex);
-  if (!device) {
-    if (Status s = model.prepare(kPartTriangles | kPartBoundary | kPartSheets); !s.ok()) return s;
-    auto uploaded = std::make_unique<cuda::DeviceModel>();
-    if (Status s = cuda::DeviceModel::upload(model, *uploaded); !s.ok()) return s;
-    device = std::move(uploaded);
-  }
-  out = device.get();
-  return Status::Ok();
-}
-#endif
 
 namespace {
 
@@ -166,7 +141,9 @@ BuildOptions build_options(bool classify_sheets, float level, const std::string&
 
 std::unique_ptr<PythonModel> build_model(Mesh mesh, const BuildOptions& options, Threads threads) {
   auto out = std::make_unique<PythonModel>();
-  check(run_released(threads, [&] { return GwnModel::build(std::move(mesh), out->model, options); }));
+  GwnModel model;
+  check(run_released(threads, [&] { return GwnModel::build(std::move(mesh), model, options); }));
+  out->engine = Engine(std::move(model));
   return out;
 }
 
@@ -209,12 +186,12 @@ void bind_model(py::module_& m) {
           },
           py::arg("path"), py::kw_only(), py::arg("classify_sheets") = true, py::arg("level") = 0.5f,
           py::arg("sheet_method") = "auto", py::arg("threads") = py::none(), py::arg("recentre") = false)
-      .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model.mesh().positions.size(); })
-      .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model.mesh().triangles.size(); })
-      .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model.mesh().positions); })
+      .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model().mesh().positions.size(); })
+      .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model().mesh().triangles.size(); })
+      .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model().mesh().positions); })
       .def_property_readonly("faces",
                              [](const PythonModel& p) {
-                               const auto& t = p.model.mesh().triangles;
+                               const auto& t = p.model().mesh().triangles;
                                auto out = new_rows<int64_t>(t.size(), {3});
                                int64_t* o = out.mutable_data();
                                for (size_t f = 0; f < t.size(); ++f)
@@ -223,33 +200,29 @@ void bind_model(py::module_& m) {
                              })
       .def_property_readonly("bounds",
                              [](const PythonModel& p) {
-                               const vec3 corners[2] = {p.model.bounds().lo, p.model.bounds().hi};
+                               const vec3 corners[2] = {p.model().bounds().lo, p.model().bounds().hi};
                                return vec3_copy(corners);
                              })
       .def_property_readonly("sheet_level",
                              [](const PythonModel& p) -> std::optional<float> {
                                const float level = run_released(std::nullopt, [&] {
                                  std::shared_lock lock(p.level_mutex);  // a classification may be running
-                                 return p.model.requested_sheet_level();
+                                 return p.model().requested_sheet_level();
                                });
                                if (std::isnan(level)) return std::nullopt;
                                return level;
                              })
       .def_property_readonly("boundary_segment_count",
                              [](const PythonModel& p) {
-                               check(run_released(std::nullopt, [&] { return p.model.prepare(kPartBoundary); }));
-                               return p.model.boundary_tree().view().segment_count;
+                               check(run_released(std::nullopt, [&] { return p.model().prepare(kPartBoundary); }));
+                               return p.model().boundary_tree().view().segment_count;
                              })
       .def(
           "set_sheet_level",
           [](PythonModel& p, float level) {
             check(run_released(std::nullopt, [&] {
               std::unique_lock lock(p.level_mutex);
-#if defined(GWNRT_HAVE_CUDA)
-              std::lock_guard<std::mutex> device_lock(p.device_mutex);
-              p.device.reset();  // uploaded again with the new sheets when next asked
-#endif
-              return p.model.set_sheet_level(level);
+              return p.engine.set_sheet_level(level);  // the GPU's copy is made again when next asked
             }));
           },
           py::arg("level"));
@@ -265,13 +238,8 @@ PYBIND11_MODULE(_gwnrt, m) {
   gwnrt::python::bind_meshing(m);
   m.def("device_available", []() -> py::tuple {
     std::string why;
-    const bool usable = gwnrt::python::cuda_usable(why);
+    const bool usable = gwnrt::cuda_usable(&why);
     return py::make_tuple(usable, why);
   });
-  m.attr("has_cuda_backend") =
-#if defined(GWNRT_HAVE_CUDA)
-      true;
-#else
-      false;
-#endif
+  m.attr("has_cuda_backend") = gwnrt::cuda_backend_built();
 }

@@ -127,31 +127,22 @@ QueryRequest query_request(const std::vector<std::string>& fields, const std::st
   return request;
 }
 
-Status evaluate_on(const PythonModel& p, bool gpu, std::span<const vec3> points, QueryRequest request,
+Status evaluate_on(const PythonModel& p, Device where, std::span<const vec3> points, QueryRequest request,
                    std::optional<float> level, const PointColumns& columns) {
   std::shared_lock lock(p.level_mutex);
   request.level = level_or_default(p, level);
-  if (!gpu) return evaluate_points_to_columns(p.model, points, request, columns);
-#if defined(GWNRT_HAVE_CUDA)
-  return guard_status("evaluate_points (cuda)", [&] {
-    const cuda::DeviceModel* device = nullptr;
-    if (Status s = p.device_model(device); !s.ok()) return s;
-    return cuda::evaluate_points_to_columns(*device, points, request, columns);
-  });
-#else
-  return {StatusCode::kUnavailable, "no CUDA backend"};  // use_cuda refused it already
-#endif
+  return p.engine.evaluate_points_to_columns(where, points, request, columns);
 }
 
 py::dict query(const PythonModel& p, const py::handle& points_obj, const std::vector<std::string>& fields,
                const std::string& method, int64_t order, float beta, std::optional<float> level,
                int64_t newton_iterations, float newton_tolerance, Threads threads, const std::string& device) {
   const QueryRequest request = query_request(fields, method, order, beta, newton_iterations, newton_tolerance);
-  const bool gpu = use_cuda(device);
+  const Device where = device_argument(device);
   const FloatArray points = float_rows(points_obj, "points", 3);
   py::dict out;
   const PointColumns columns = point_columns(request.fields, size_t(points.shape(0)), out);
-  check(run_released(threads, [&] { return evaluate_on(p, gpu, as_vec3(points), request, level, columns); }));
+  check(run_released(threads, [&] { return evaluate_on(p, where, as_vec3(points), request, level, columns); }));
   return out;
 }
 
@@ -173,7 +164,7 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
   options.max_crossings = checked_integer<uint32_t>(max_crossings, "max_crossings");
   options.beta = beta;
   options.exact = exact;
-  const bool gpu = use_cuda(device);
+  const Device where = device_argument(device);
   const FloatArray origins = float_rows(origins_obj, "origins", 3);
   const FloatArray directions = float_rows(directions_obj, "directions", 3);
   const FloatArray tnear = float_rows(tnear_obj, "tnear", 1);
@@ -205,15 +196,7 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
       const std::span<const vec3> o = as_vec3(origins), d = as_vec3(directions);
       for (size_t i = 0; i < k; ++i) rays[i] = Ray{o[i], d[i], tnear.data()[i], tfar.data()[i]};
       std::shared_lock lock(p.level_mutex);
-      if (gpu) {
-#if defined(GWNRT_HAVE_CUDA)
-        const cuda::DeviceModel* device_model = nullptr;
-        if (Status s = p.device_model(device_model); !s.ok()) return s;
-        if (Status s = cuda::trace_rays(*device_model, rays, options, hits); !s.ok()) return s;
-#endif
-      } else if (Status s = trace_rays(p.model, rays, options, hits); !s.ok()) {
-        return s;
-      }
+      if (Status s = p.engine.trace_rays(where, rays, options, hits); !s.ok()) return s;
       for (size_t i = 0; i < k; ++i) {
         const RayHit& h = hits[i];
         hit[i] = h.hit;
@@ -249,7 +232,7 @@ std::vector<double> cxx_batch_seconds(const PythonModel& p, const py::handle& po
     check(run_released(threads, [&] {
       std::shared_lock lock(p.level_mutex);
       request.level = level_or_default(p, std::nullopt);
-      return evaluate_points(p.model, as_vec3(points), request, results);
+      return evaluate_points(p.model(), as_vec3(points), request, results);
     }));
     seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }

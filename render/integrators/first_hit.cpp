@@ -11,15 +11,14 @@
 #include "apps/common/progress_bar.h"
 #include "apps/common/trace_level.h"
 #include "gwnrt/base/memory.h"
+#include "gwnrt/engine.h"
 #include "gwnrt/model/model.h"
 #include "gwnrt/query/validation.h"
 #include "render/image_output.h"
 #include "render/render_program.h"
 #include "render/tiles.h"
 
-#if defined(GWNRT_HAVE_CUDA)
 #include "render/integrators/first_hit_cuda.h"
-#endif
 
 namespace gwnrt::render {
 
@@ -151,8 +150,8 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
       !s.ok())
     return apps::fail(kProgram, s.message());
 
-  bool use_cuda = false;
-  if (Status s = apps::choose_device(kProgram, job.device, use_cuda); !s.ok()) return apps::fail(kProgram, s.message());
+  Device where = Device::kCpu;
+  if (Status s = apps::choose_device(kProgram, job.device, where); !s.ok()) return apps::fail(kProgram, s.message());
 
   GwnModel model;
   apps::ModelLoad loaded;
@@ -180,19 +179,18 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   if (!finite(camera.eye) || !finite(camera.forward) || !finite(camera.right) || !finite(camera.up))
     return apps::fail(kProgram, job.mesh + ": the mesh is too large to frame with a camera in float");
   FirstHitRender render;
-  std::string where = count_of(thread_limit.workers(), "thread");
-  if (use_cuda) {
-#if defined(GWNRT_HAVE_CUDA)
-    cuda::DeviceModel device_model;
-    if (Status s = cuda::DeviceModel::upload(model, device_model); !s.ok())
+  std::string where_text = count_of(thread_limit.workers(), "thread");
+  if (where == Device::kCuda) {
+    const Engine engine(std::move(model));
+    const cuda::DeviceModel* device_model = nullptr;
+    if (Status s = engine.device_model(device_model); !s.ok())
       return apps::fail(kProgram, job.mesh + ": " + s.message());
     std::vector<FirstHitSample> pixels;
-    if (Status s = render_first_hit_cuda(device_model, camera, job.settings, job.frames, pixels, render.seconds);
+    if (Status s = render_first_hit_cuda(*device_model, camera, job.settings, job.frames, pixels, render.seconds);
         !s.ok())
       return apps::fail(kProgram, job.mesh + ": " + s.message());
     render = first_hit_image(pixels, camera, job.settings, render.seconds);
-    where = "the GPU";
-#endif
+    where_text = "the GPU";
   } else {
     std::atomic<size_t> progress{0};
     apps::ProgressBar bar(progress, size_t(job.width) * size_t(job.height) * size_t(job.frames), "px");
@@ -209,11 +207,11 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   if (job.frames > 1)
     std::printf("%s: %d frames, %.4g frames/s (%.3f ms a frame%s)\n", kProgram, job.frames,
                 render.seconds > 0 ? 1.0 / render.seconds : 0.0, 1e3 * render.seconds,
-                use_cuda ? ", its pixels copied to the host; the upload not counted" : "");
+                where == Device::kCuda ? ", its pixels copied to the host; the upload not counted" : "");
   std::printf(
       "%s: %dx%d in %.3f s on %s: %s rays/s, %.2f steps/ray (max %u), %.2f crossings/ray; "
       "hits: %llu sheet, %llu smooth, %llu missed; %llu capped\n",
-      kProgram, job.width, job.height, render.seconds, where.c_str(), apps::human_count(rays_per_second).c_str(),
+      kProgram, job.width, job.height, render.seconds, where_text.c_str(), apps::human_count(rays_per_second).c_str(),
       stats.mean_steps(), stats.max_steps, stats.mean_crossings(), (unsigned long long)stats.sheet_hits,
       (unsigned long long)stats.smooth_hits, (unsigned long long)(stats.rays - stats.sheet_hits - stats.smooth_hits),
       (unsigned long long)(stats.step_capped + stats.crossing_capped));

@@ -1,9 +1,12 @@
+// render_first_hit_cuda (first_hit_cuda.h): the per-pixel function in a kernel.
 #include <chrono>
 #include <memory>
 #include <string>
 
 #include <cuda_runtime.h>
 
+#include "gwnrt/cuda.h"
+#include "gwnrt/query/validation.h"
 #include "render/integrators/first_hit_cuda.h"
 
 namespace gwnrt::render {

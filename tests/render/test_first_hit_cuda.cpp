@@ -6,32 +6,28 @@
 #include <gtest/gtest.h>
 
 #include "../test_util.h"
+#include "gwnrt/engine.h"
 #include "render/camera.h"
 #include "render/integrators/first_hit.h"
-
-#if defined(GWNRT_HAVE_CUDA)
 #include "render/integrators/first_hit_cuda.h"
-#endif
 
 namespace gwnrt::render {
 namespace {
 
 TEST(FirstHitCuda, MatchesTheCpuImage) {
-#if !defined(GWNRT_HAVE_CUDA)
-  GTEST_SKIP() << "built without the CUDA backend";
-#else
   std::string why;
-  if (!cuda::device_available(&why)) GTEST_SKIP() << "CUDA tests skipped: " << why;
+  if (!cuda_usable(&why)) GTEST_SKIP() << "CUDA tests skipped: " << why;
   for (const char* mesh : {"bunny_holes.obj", "teapot.obj"}) {
-    const GwnModel model = test::build_model(test::load_test_mesh(mesh));
-    cuda::DeviceModel device;
-    ASSERT_TRUE(cuda::DeviceModel::upload(model, device).ok());
+    const Engine engine(test::build_model(test::load_test_mesh(mesh)));
+    const GwnModel& model = engine.model();
+    const cuda::DeviceModel* device = nullptr;
+    ASSERT_TRUE(engine.device_model(device).ok());
     const render::PinholeCamera camera = render::frame_box(model.bounds(), 320, 240);
     FirstHitSettings settings;
     const FirstHitRender cpu = render_first_hit(model.view(), camera, settings);
     std::vector<FirstHitSample> pixels;
     double seconds = 0;
-    const Status s = render_first_hit_cuda(device, camera, settings, 2, pixels, seconds);
+    const Status s = render_first_hit_cuda(*device, camera, settings, 2, pixels, seconds);
     ASSERT_TRUE(s.ok()) << s.message();
     ASSERT_EQ(pixels.size(), cpu.traces.size());
     size_t differ = 0, kind_differs = 0;
@@ -45,7 +41,6 @@ TEST(FirstHitCuda, MatchesTheCpuImage) {
     std::printf("[ %s ] %zu pixels: hit/miss differs at %zu, kind at %zu; %.3f ms a frame\n", mesh, pixels.size(),
                 differ, kind_differs, 1e3 * seconds);
   }
-#endif
 }
 
 }  // namespace
