@@ -259,8 +259,7 @@ int main(int argc, char** argv) {
   if (const auto status = apps::parse_command_line(app, argc, argv)) return *status;
   if (Status s = validate_trace_options(options); !s.ok()) apps::die(kProgram, s.message());
   // Checked before allocating, against the arrays each pixel has: its ray, the hits of (a) and (b),
-  // and at most one entry in the check's groups and the step statistics. (Issue 15: 100000 x 100000
-  // ended in std::bad_alloc.)
+  // and at most one entry in the check's groups and the step statistics (a bad_alloc otherwise).
   const uint64_t per_pixel = sizeof(Ray) + sizeof(SimpleHit) + sizeof(RayHit) + sizeof(size_t) + sizeof(uint32_t);
   if (Status s = check_memory(saturating_product(saturating_product(uint64_t(width), uint64_t(height)), per_pixel),
                               "--width " + std::to_string(width) + " --height " + std::to_string(height) + ": " +

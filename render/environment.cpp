@@ -178,7 +178,7 @@ Status Environment::load(const std::string& path, float scale, Environment& out)
     return {StatusCode::kInvalidArgument, path + ": empty image (" + std::to_string(w) + " x " + std::to_string(h) +
                                               ", " + std::to_string(channels) + " channels)"};
   }
-  // Checked before allocating (issue 15, item 3): a header may claim any size. Held at once: the
+  // Checked before allocating: a header may claim any size. Held at once: the
   // file's channels, the RGB pixels and the column CDFs, in floats.
   const uint64_t pixel_count = saturating_product(uint64_t(w), uint64_t(h));
   if (Status s = check_memory(saturating_product(pixel_count, 4 * (uint64_t(channels) + 3 + 1)),

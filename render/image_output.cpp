@@ -158,7 +158,7 @@ Image tone_mapped(const Image& image) {
           q[c] = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
         } else {
           // The same curve divided through by v², so that v² cannot overflow (from v = 1.8e19,
-          // inf / inf made a bright pixel black; issue 15, item 13).
+          // inf / inf would make a bright pixel black).
           const float r = 1.0f / v;
           q[c] = (2.51f + 0.03f * r) / (2.43f + (0.59f + 0.14f * r) * r);
         }

@@ -27,7 +27,7 @@ const char* supported_image_extensions();
 // channels (as R, G, B) and encodes them with the sRGB transfer curve; EXR keeps every channel,
 // linear, under the image's channel names. `description` goes into the file's metadata (the
 // command line that made it, say). The file is encoded in memory and then written and closed
-// here, so that every failure (a full disk, /dev/full) is reported (issue 15, item 14): with
+// here, so that every failure (a full disk, /dev/full) is reported: with
 // OpenImageIO's own error message, or the system's.
 Status write_image(const std::string& path, const Image& image, const std::string& description = {});
 

@@ -212,7 +212,7 @@ int main(int argc, char** argv) {
   if (integrator == "path") {
     // Scene files and the default scene bring their own camera and settings; what is given here
     // overrides them.
-    // 0 and negative values are refused when given (issue 15, item 15): leaving an option out is
+    // 0 and negative values are refused when given: leaving an option out is
     // how the scene's value is kept.
     // Within the ranges a scene file takes (kMaxSpp, kMaxPathDepth, kMaxSeed).
     const auto in_range = [&](const char* name, int64_t value, int64_t lo, int64_t hi) {

@@ -24,7 +24,7 @@ namespace {
 using json = nlohmann::json;
 using glm::dvec3;
 
-// What float arithmetic carries through Embree, and so what a scene may hold (issue 15, item 1).
+// What float arithmetic carries through Embree, and so what a scene may hold.
 //
 // Coordinates: Embree takes a ray only if every component of its origin is within FLT_LARGE
 // (1.8e18; beyond, its ray.valid() assertion aborts), and its triangle test multiplies three
@@ -148,8 +148,8 @@ class DuplicateKeyCheck {
   std::vector<Level> levels_;
 };
 
-// Refuses any key of the object `j` that is not in `allowed` (issue 15, item 12: a misspelt key
-// is an error, not a silently kept default).
+// Refuses any key of the object `j` that is not in `allowed`: a misspelt key is an error, not a
+// silently kept default.
 void check_keys(const json& j, const std::string& where, std::initializer_list<const char*> allowed) {
   for (const auto& item : j.items()) {
     if (std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return item.key() == a; })) continue;
@@ -172,7 +172,7 @@ const json* member(const json& j, const char* key) {
 }
 
 // A finite number within float's range: the renderer computes in float, where a double such as
-// 1e39 would become inf (issue 15, item 13).
+// 1e39 would become inf.
 double real(const json& j, const std::string& where) {
   if (!j.is_number()) fail(where, std::string("expected a number, got ") + j.type_name());
   const double v = j.get<double>();
@@ -241,7 +241,7 @@ struct Box {
 };
 
 // The camera at `eye` looking at `target`, after checking that it makes finite rays that mean
-// something (issue 15, item 1): the eye and the target within the coordinate limit and apart, "up"
+// something: the eye and the target within the coordinate limit and apart, "up"
 // neither zero nor (nearly) along the view direction. The direction and "up" are normalised in
 // double from the floats the camera keeps, so that tiny differences and tiny "up" vectors
 // (whose squares underflow float) are no trouble.
@@ -472,7 +472,7 @@ struct Locations {
   std::vector<std::vector<std::string>> instances;  // per SceneDesc::gwn_objects, per instance
 };
 
-// The checks that need the whole scene (issue 15, item 1): every vertex in world space within the
+// The checks that need the whole scene: every vertex in world space within the
 // coordinate limit, the scene not too small for float, and every instance's object space able to
 // hold the rays it will be given: all start within the box of the geometry and the eye, so that
 // box's corners, taken to object space, must be within the limit too.

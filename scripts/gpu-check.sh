@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU check (issue 17 item 6). On a machine with an NVIDIA GPU, nvcc, cmake and ninja but none
+# The GPU check. On a machine with an NVIDIA GPU, nvcc, cmake and ninja but none
 # of the project's Debian packages and no network, it builds the CUDA tests, gwnrt-consistency,
 # gwnrt-bench-query and gwnrt-mesh (Embree and OpenImageIO off) against TBB, GLM, GoogleTest,
 # CLI11 and nlohmann-json unpacked from Debian's .debs, runs them, and writes every log and JSON

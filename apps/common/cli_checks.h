@@ -1,6 +1,6 @@
 // CLI11 checks shared by the programs. CLI11's PositiveNumber and Range let nan through, and
 // PositiveNumber words its refusal of 0 as "Value 0 not in range 0.000000 to 17976931348623157...",
-// 300 digits (issue 15, item 16); these say what is wanted.
+// 300 digits; these say what is wanted.
 #pragma once
 
 #include <charconv>

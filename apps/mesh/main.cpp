@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
   gwnrt::Device where = gwnrt::Device::kCpu;
   if (Status s = gwnrt::apps::choose_device(kProgram, device, where); !s.ok()) return fail(kProgram, s.message());
   // The mesher refuses a grid beyond its budget, saying what it would need; a budget beyond the
-  // memory available would let the kernel kill the process instead (issue 15), or on the GPU
+  // memory available would let the kernel kill the process instead, or on the GPU
   // fail an allocation half-way.
   const uint64_t available = gwnrt::Engine().available_memory(where);
   const bool budget_is_available_memory = available < options.memory_budget;

@@ -328,7 +328,7 @@ int main(int argc, char** argv) {
   if (gwnrt::Status s = gwnrt::apps::read_points(points_path, points, report.origin); !s.ok())
     return fail(kProgram, s.message());
 
-  // Checked before allocating (issue 15): with overcommit a size beyond memory would not fail here
+  // Checked before allocating: with overcommit a size beyond memory would not fail here
   // but kill the process later, while it fills the results.
   if (gwnrt::Status s = gwnrt::check_memory(
           gwnrt::saturating_product(points.size(), sizeof(PointResult)),

@@ -137,8 +137,8 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   const TraceOptions& trace = job.settings.trace;
   const bool solid_angle = trace.mode == TraceMode::kSolidAngle;
 
-  // The pixel buffers, checked against the memory available before the mesh is even loaded
-  // (issue 15, item 3): the colour image, the per-pixel traces, the statistics image when asked
+  // The pixel buffers, checked against the memory available before the mesh is even loaded:
+  // the colour image, the per-pixel traces, the statistics image when asked
   // for, and what writing each needs.
   const auto format_of = [](const std::string& path) { return image_format_for(path).value_or(ImageFormat::kPng); };
   uint64_t bytes_per_pixel = 4 * 3 + sizeof(PixelTrace) + write_image_bytes_per_pixel(format_of(job.output), 3);

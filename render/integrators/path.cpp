@@ -275,8 +275,8 @@ int run_path_job(const PathJob& job, const std::string& description) {
     std::fprintf(stderr, "%s: %s: far from the origin for its size: rendered relative to (%.17g, %.17g, %.17g)\n",
                  kProgram, job.input.c_str(), scene.origin.x, scene.origin.y, scene.origin.z);
 
-  // The pixel buffers, checked against the memory available before anything is allocated
-  // (issue 15, item 3): the image (3 channels, 10 with AOVs), PNG's tone-mapped copy, and what
+  // The pixel buffers, checked against the memory available before anything is allocated: the
+  // image (3 channels, 10 with AOVs), PNG's tone-mapped copy, and what
   // writing needs.
   const ImageFormat format = image_format_for(job.output).value_or(ImageFormat::kPng);
   const int channels = scene.render.aovs ? 10 : 3;

@@ -151,25 +151,47 @@ Status run_marching_cubes(Backend& backend, const SparseGridView& view, uint64_t
   return Status::Ok();
 }
 
-// Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
-// which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats.
-template <class Backend>
-Status run_dual_contouring(Backend& backend, const ModelView& model, const MeshingOptions& options,
-                           const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
-  using U32 = typename Backend::template Array<uint32_t>;
-  detail::PassClock clock;
-  detail::MemoryBudget budget(grid, options.memory_budget, stats);
-  // The block map (step 2: needed_dense, is_slot and slot_of_block) has three words a block of
-  // the grid, known now: a grid whose map alone is beyond the budget is refused before scouting,
-  // which at --resolution 100000 ran past a minute and 3 GB before the refusal.
-  const uint64_t block_count = grid.block_count();
-  if (Status s = budget.reserve(block_count * 3 * sizeof(uint32_t), "the block map"); !s.ok()) return s;
+namespace detail {
 
-  // 1. Scouting, coarse to fine: a block of 2^L·kBlockCells cells is split only when S may meet it.
+// The arrays of the sparse grid (sparse_grid.h) as the passes fill them; `view` points into them.
+template <class Backend>
+struct SparseGridArrays {
+  template <class T>
+  using Array = typename Backend::template Array<T>;
+  Array<uint32_t> slot_of_block, block_of_slot, needed_from;
+  Array<float> corner_value;
+  Array<uint8_t> edge_mask;
+  Array<uint32_t> edge_count, edge_offset;
+  Array<uint32_t> cell_parts, cell_count, cell_offset;
+  SparseGridView view;
+  uint64_t slots = 0;
+};
+
+// The crossing edges (corner item · 4 + axis) and their Hermite data.
+template <class Backend>
+struct EdgeArrays {
+  typename Backend::template Array<uint64_t> edges;
+  typename Backend::template Array<HermitePoint> hermite;
+  uint64_t total = 0;
+};
+
+// Dual contouring's vertices: position, normal and the cell item each sits in.
+template <class Backend>
+struct VertexArrays {
+  typename Backend::template Array<vec3> positions, normals;
+  typename Backend::template Array<uint64_t> cell;
+  uint64_t total = 0;
+};
+
+// 1. Scouting, coarse to fine: a block of 2^L·kBlockCells cells is split only when S may meet it.
+// `kept`: the blocks of kBlockCells³ cells S may meet.
+template <class Backend>
+Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& scout, MemoryBudget& budget,
+                    typename Backend::template Array<GridCoord>& kept) {
   const int32_t corners_max = std::max({grid.cells[0], grid.cells[1], grid.cells[2]}) + 1;
   int level_top = 0;
   while ((int64_t(kBlockCells) << level_top) * 8 < corners_max) ++level_top;
-  typename Backend::template Array<GridCoord> candidates, kept;
+  typename Backend::template Array<GridCoord> candidates;
   {
     const int32_t size = kBlockCells << level_top;
     const int32_t n[3] = {(grid.cells[0] + size) / size, (grid.cells[1] + size) / size, (grid.cells[2] + size) / size};
@@ -182,7 +204,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   for (int level = level_top;; --level) {
     const int32_t size = kBlockCells << level;
     const GridCoord* c = candidates.data();
-    const uint64_t count = detail::compact(
+    const uint64_t count = compact(
         backend, c, candidates.size(),
         [=] GWNRT_PASS(uint64_t i) {
           const GridCoord b = c[i];
@@ -195,7 +217,7 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
         kept);
     if (Status s = budget.reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
     budget.release(count * sizeof(GridCoord) * (level > 0 ? 9 : 1));
-    if (level == 0) break;
+    if (level == 0) return Status::Ok();
     candidates.resize(count * 8);
     const GridCoord* src = kept.data();
     GridCoord* children = candidates.data();
@@ -205,18 +227,18 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
       children[i] = {2 * b.x + (d & 1), 2 * b.y + ((d >> 1) & 1), 2 * b.z + ((d >> 2) & 1)};
     });
   }
-  stats.active_blocks = kept.size();
-  stats.seconds.scout = clock.lap();
-  if (kept.size() == 0) {
-    stats.message = "S does not meet the grid: no point has w above the level (an empty mesh)";
-    return Status::Ok();
-  }
+}
 
-  // 2. Slots: the active blocks and the neighbours (+x, +y, +z) whose corners their cells read
-  // (the block map's bytes reserved above).
-  U32 needed_dense, slot_of_block;
+// 2. Slots: the active blocks and the neighbours (+x, +y, +z) whose corners their cells read; the
+// block map's bytes were reserved before scouting.
+template <class Backend>
+Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backend::template Array<GridCoord>& kept,
+                    MemoryBudget& budget, SparseGridArrays<Backend>& g) {
+  using U32 = typename Backend::template Array<uint32_t>;
+  const uint64_t block_count = grid.block_count();
+  U32 needed_dense, is_slot;
   needed_dense.resize(block_count);
-  slot_of_block.resize(block_count);
+  g.slot_of_block.resize(block_count);
   {
     uint32_t* needed = needed_dense.data();
     const GridCoord* b = kept.data();
@@ -228,23 +250,21 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
       }
     });
   }
-  U32 is_slot;
   is_slot.resize(block_count);
   {
     const uint32_t* needed = needed_dense.data();
     uint32_t* f = is_slot.data();
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
-  const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, slot_of_block.data());
+  const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
   // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
   const uint64_t per_slot = uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8;
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
-  U32 block_of_slot, needed_from;
-  block_of_slot.resize(slots);
-  needed_from.resize(slots);
+  g.block_of_slot.resize(slots);
+  g.needed_from.resize(slots);
   {
     const uint32_t *f = is_slot.data(), *needed = needed_dense.data();
-    uint32_t *map = slot_of_block.data(), *bos = block_of_slot.data(), *nf = needed_from.data();
+    uint32_t *map = g.slot_of_block.data(), *bos = g.block_of_slot.data(), *nf = g.needed_from.data();
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) {
       if (f[i]) {
         bos[map[i]] = uint32_t(i);
@@ -254,120 +274,176 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
       }
     });
   }
-  stats.evaluated_blocks = slots;
+  g.slots = slots;
+  g.view.grid = grid;
+  g.view.slot_of_block = g.slot_of_block.data();
+  g.view.block_of_slot = g.block_of_slot.data();
+  g.view.needed_from = g.needed_from.data();
+  return Status::Ok();
+}
 
-  SparseGridView view;
-  view.grid = grid;
-  view.slot_of_block = slot_of_block.data();
-  view.block_of_slot = block_of_slot.data();
-  view.needed_from = needed_from.data();
+// 3. Corner values: w − w* at every corner an active block's cells read.
+template <class Backend>
+void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOptions& options,
+                      SparseGridArrays<Backend>& g) {
+  g.corner_value.resize(g.slots * kBlockItems);
+  const uint64_t columns = g.slots * kBlockCells * kBlockCells;
+  if (options.progress_total) options.progress_total->fetch_add(columns);
+  backend.parallel_for(columns, CornerColumnPass{g.view, model, options.winding, options.level, g.corner_value.data()},
+                       4, options.progress);
+  g.view.corner_value = g.corner_value.data();
+}
 
-  // 3. Corner values.
-  typename Backend::template Array<float> corner_value;
-  corner_value.resize(slots * kBlockItems);
-  if (options.progress_total) options.progress_total->fetch_add(slots * kBlockCells * kBlockCells);
-  backend.parallel_for(slots * kBlockCells * kBlockCells,
-                       CornerColumnPass{view, model, options.winding, options.level, corner_value.data()}, 4,
-                       options.progress);
-  view.corner_value = corner_value.data();
-  stats.seconds.corners = clock.lap();
-
-  // 4. Edges and their Hermite data.
-  typename Backend::template Array<uint8_t> edge_mask;
-  U32 edge_count, edge_offset;
-  edge_mask.resize(slots * kBlockItems);
-  edge_count.resize(slots * kBlockItems);
-  edge_offset.resize(slots * kBlockItems);
-  backend.parallel_for(slots * kBlockItems, EdgeCountPass{view, edge_mask.data(), edge_count.data()});
-  const uint64_t edge_total = backend.exclusive_scan(edge_count.data(), edge_count.size(), edge_offset.data());
-  if (edge_total >= kEmptyLane / 2)
-    return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(edge_total) + " crossing edges, beyond 2^31"};
-  if (Status s =
-          budget.reserve(edge_total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
+// 4. Edges: those whose corners straddle the level, listed, each with its Hermite point and
+// normal, and the tally of how their crossings were found.
+template <class Backend>
+Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions& options, MemoryBudget& budget,
+                  SparseGridArrays<Backend>& g, EdgeArrays<Backend>& e, MeshingStats& stats) {
+  const uint64_t items = g.slots * kBlockItems;
+  g.edge_mask.resize(items);
+  g.edge_count.resize(items);
+  g.edge_offset.resize(items);
+  backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), g.edge_count.data()});
+  e.total = backend.exclusive_scan(g.edge_count.data(), g.edge_count.size(), g.edge_offset.data());
+  if (e.total >= kEmptyLane / 2)
+    return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(e.total) + " crossing edges, beyond 2^31"};
+  if (Status s = budget.reserve(e.total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
       !s.ok())
     return s;
-  view.edge_mask = edge_mask.data();
-  view.edge_offset = edge_offset.data();
-  stats.corners = 0;
-  typename Backend::template Array<uint64_t> edges;
-  edges.resize(edge_total);
-  backend.parallel_for(slots * kBlockItems, EdgeListPass{view, edges.data()});
-  typename Backend::template Array<HermitePoint> hermite;
-  hermite.resize(edge_total);
-  if (options.progress_total) options.progress_total->fetch_add(edge_total);
-  backend.parallel_for(edge_total,
-                       HermitePass{view, model, options.winding, options.level, edges.data(), hermite.data()}, 16,
+  g.view.edge_mask = g.edge_mask.data();
+  g.view.edge_offset = g.edge_offset.data();
+  e.edges.resize(e.total);
+  backend.parallel_for(items, EdgeListPass{g.view, e.edges.data()});
+  e.hermite.resize(e.total);
+  if (options.progress_total) options.progress_total->fetch_add(e.total);
+  backend.parallel_for(e.total,
+                       HermitePass{g.view, model, options.winding, options.level, e.edges.data(), e.hermite.data()}, 16,
                        options.progress);
-  stats.crossing_edges = edge_total;
-  {
-    typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
-    tally.resize(kHermiteTallies);
-    backend.parallel_for((edge_total + kHermiteTallyRun - 1) / kHermiteTallyRun,
-                         HermiteTally{hermite.data(), edge_total, tally.data()}, 16);
-    stats.sheet_edges = backend.to_host(tally, kTallySheet);
-    stats.smooth_edges = backend.to_host(tally, kTallySmooth);
-    stats.fallback_edges = backend.to_host(tally, kTallyFallback);
-    stats.capped_edges = backend.to_host(tally, kTallyCapped);
+  stats.crossing_edges = e.total;
+  typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
+  tally.resize(kHermiteTallies);
+  backend.parallel_for((e.total + kHermiteTallyRun - 1) / kHermiteTallyRun,
+                       HermiteTally{e.hermite.data(), e.total, tally.data()}, 16);
+  stats.sheet_edges = backend.to_host(tally, kTallySheet);
+  stats.smooth_edges = backend.to_host(tally, kTallySmooth);
+  stats.fallback_edges = backend.to_host(tally, kTallyFallback);
+  stats.capped_edges = backend.to_host(tally, kTallyCapped);
+  return Status::Ok();
+}
+
+// 5. Cell vertices: the cells around the crossing edges, one vertex per surface component of
+// each, placed by its QEF (CellVertexPass).
+template <class Backend>
+Status solve_cell_vertices(Backend& backend, MemoryBudget& budget, SparseGridArrays<Backend>& g,
+                           const EdgeArrays<Backend>& e, VertexArrays<Backend>& v, MeshingStats& stats) {
+  const uint64_t items = g.slots * kBlockItems;
+  g.cell_parts.resize(items);  // zeroed
+  g.cell_count.resize(items);
+  g.cell_offset.resize(items);
+  backend.parallel_for(e.total, CellMarkPass{g.view, e.edges.data(), g.cell_parts.data()});
+  typename Backend::template Array<unsigned long long> multi;
+  multi.resize(1);
+  backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), g.cell_count.data(), multi.data()});
+  stats.multi_component_cells = backend.to_host(multi, 0);
+  g.view.cell_parts = g.cell_parts.data();
+  v.total = backend.exclusive_scan(g.cell_count.data(), g.cell_count.size(), g.cell_offset.data());
+  if (Status s = budget.reserve(v.total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
+  g.view.cell_vertex_count = g.cell_count.data();
+  g.view.cell_vertex_offset = g.cell_offset.data();
+  v.positions.resize(v.total);
+  v.normals.resize(v.total);
+  v.cell.resize(v.total);
+  backend.parallel_for(items,
+                       CellVertexPass{g.view, e.hermite.data(), v.positions.data(), v.normals.data(), v.cell.data()});
+  return Status::Ok();
+}
+
+// 6. Faces: two triangles per crossing edge (QuadPass); an edge missing a cell gives empty ones.
+template <class Backend>
+void make_faces(Backend& backend, const SparseGridArrays<Backend>& g, const EdgeArrays<Backend>& e,
+                const VertexArrays<Backend>& v, typename Backend::template Array<uvec3>& triangles) {
+  triangles.resize(2 * e.total);
+  backend.parallel_for(e.total,
+                       QuadPass{g.view, e.edges.data(), e.hermite.data(), v.positions.data(), triangles.data()});
+}
+
+// 7. Normals: averaged with the neighbouring vertices within options.smooth_angle (none at 0).
+template <class Backend>
+void smooth_normals(Backend& backend, const MeshingOptions& options, const SparseGridArrays<Backend>& g,
+                    VertexArrays<Backend>& v) {
+  if (!(options.smooth_angle > 0.0f)) return;
+  typename Backend::template Array<vec3> smoothed;
+  smoothed.resize(v.total);
+  backend.parallel_for(v.total, SmoothNormalsPass{g.view, v.cell.data(), v.normals.data(), smoothed.data(),
+                                                  cosf(options.smooth_angle * kDegree)});
+  v.normals = std::move(smoothed);
+}
+
+// 8. Output: the vertices moved out, the triangles without the empty ones (indexed).
+template <class Backend>
+void write_indexed_mesh(Backend& backend, VertexArrays<Backend>& v,
+                        const typename Backend::template Array<uvec3>& triangles, SurfaceMesh& out,
+                        MeshingStats& stats) {
+  backend.move_out(v.positions, out.positions);
+  backend.move_out(v.normals, out.normals);
+  const uvec3* t = triangles.data();
+  const uint64_t n = triangles.size();
+  typename Backend::template Array<uvec3> kept_triangles;
+  const uint64_t face_total = compact(
+      backend, t, n, [=] GWNRT_PASS(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
+  backend.move_out(kept_triangles, out.triangles);
+  stats.open_edges = (n - face_total) / 2;
+}
+
+}  // namespace detail
+
+// Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
+// which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats. Marching
+// cubes (options.method) shares the steps up to the edges.
+template <class Backend>
+Status run_dual_contouring(Backend& backend, const ModelView& model, const MeshingOptions& options,
+                           const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
+  detail::PassClock clock;
+  detail::MemoryBudget budget(grid, options.memory_budget, stats);
+  // The block map (needed_dense, is_slot and slot_of_block) has three words a block of the grid,
+  // known now: a grid whose map alone is beyond the budget is refused before scouting.
+  if (Status s = budget.reserve(grid.block_count() * 3 * sizeof(uint32_t), "the block map"); !s.ok()) return s;
+
+  typename Backend::template Array<GridCoord> kept;
+  if (Status s = detail::scout_blocks(backend, grid, scout, budget, kept); !s.ok()) return s;
+  stats.active_blocks = kept.size();
+  stats.seconds.scout = clock.lap();
+  if (kept.size() == 0) {
+    stats.message = "S does not meet the grid: no point has w above the level (an empty mesh)";
+    return Status::Ok();
   }
+  detail::SparseGridArrays<Backend> g;
+  if (Status s = detail::assign_slots(backend, grid, kept, budget, g); !s.ok()) return s;
+  stats.evaluated_blocks = g.slots;
+
+  detail::evaluate_corners(backend, model, options, g);
+  stats.seconds.corners = clock.lap();
+
+  stats.corners = 0;
+  detail::EdgeArrays<Backend> e;
+  if (Status s = detail::find_edges(backend, model, options, budget, g, e, stats); !s.ok()) return s;
   stats.seconds.edges = clock.lap();
-  if (edge_total == 0) {
+  if (e.total == 0) {
     stats.message = "S does not cross the grid: every corner is on one side of the level (an empty mesh)";
     return Status::Ok();
   }
-
   if (options.method == MeshingMethod::kMarchingCubes)
-    return run_marching_cubes(backend, view, edge_total, hermite, budget, clock, out, stats);
+    return run_marching_cubes(backend, g.view, e.total, e.hermite, budget, clock, out, stats);
 
-  // 5. Cells: one vertex per component.
-  U32 cell_parts, cell_count, cell_offset;
-  cell_parts.resize(slots * kBlockItems);  // zeroed
-  cell_count.resize(slots * kBlockItems);
-  cell_offset.resize(slots * kBlockItems);
-  backend.parallel_for(edge_total, CellMarkPass{view, edges.data(), cell_parts.data()});
-  typename Backend::template Array<unsigned long long> multi;
-  multi.resize(1);
-  backend.parallel_for(slots * kBlockItems, CellCountPass{view, cell_parts.data(), cell_count.data(), multi.data()});
-  stats.multi_component_cells = backend.to_host(multi, 0);
-  view.cell_parts = cell_parts.data();
-  const uint64_t vertex_total = backend.exclusive_scan(cell_count.data(), cell_count.size(), cell_offset.data());
-  if (Status s = budget.reserve(vertex_total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok())
-    return s;
-  view.cell_vertex_count = cell_count.data();
-  view.cell_vertex_offset = cell_offset.data();
-  typename Backend::template Array<vec3> positions, normals;
-  typename Backend::template Array<uint64_t> vertex_cell;
-  positions.resize(vertex_total);
-  normals.resize(vertex_total);
-  vertex_cell.resize(vertex_total);
-  backend.parallel_for(slots * kBlockItems,
-                       CellVertexPass{view, hermite.data(), positions.data(), normals.data(), vertex_cell.data()});
+  detail::VertexArrays<Backend> v;
+  if (Status s = detail::solve_cell_vertices(backend, budget, g, e, v, stats); !s.ok()) return s;
   stats.seconds.vertices = clock.lap();
-
-  // 6. Faces: two triangles per crossing edge; edges missing a cell are dropped.
   typename Backend::template Array<uvec3> triangles;
-  triangles.resize(2 * edge_total);
-  backend.parallel_for(edge_total, QuadPass{view, edges.data(), hermite.data(), positions.data(), triangles.data()});
+  detail::make_faces(backend, g, e, v, triangles);
   stats.seconds.faces = clock.lap();
-
-  // 7. Normals.
-  if (options.smooth_angle > 0.0f) {
-    typename Backend::template Array<vec3> smoothed;
-    smoothed.resize(vertex_total);
-    backend.parallel_for(vertex_total, SmoothNormalsPass{view, vertex_cell.data(), normals.data(), smoothed.data(),
-                                                         cosf(options.smooth_angle * kDegree)});
-    normals = std::move(smoothed);
-  }
+  detail::smooth_normals(backend, options, g, v);
   stats.seconds.smoothing = clock.lap();
-
-  // 8. Output (indexed).
-  backend.move_out(positions, out.positions);
-  backend.move_out(normals, out.normals);
-  const uvec3* t = triangles.data();
-  typename Backend::template Array<uvec3> kept_triangles;
-  const uint64_t face_total = detail::compact(
-      backend, t, 2 * edge_total, [=] GWNRT_PASS(uint64_t i) { return t[i].x != kEmptyLane; }, kept_triangles);
-  backend.move_out(kept_triangles, out.triangles);
-  stats.open_edges = (2 * edge_total - face_total) / 2;
+  detail::write_indexed_mesh(backend, v, triangles, out, stats);
   stats.seconds.output = clock.lap();
   return Status::Ok();
 }

@@ -201,102 +201,156 @@ class SurfaceTracer {
     return false;
   }
 
-  // Harnack steps on φ over [t, t_end]; true when the trace ended (a hit, or a cap).
-  GWNRT_HD bool march(float t, float t_end) {
-    float t_prev = t, rho_prev = 0.0f;
-    bool overstepped = false, gradient_wanted = false;
-    // The previous sample (at t_prev), and whether the step from it was safe. φ is continued from
-    // it to find the levels crossed since: none after a safe step, except when round-off carried
-    // the step a few ulps past the level it stopped short of (found here, not lost); the level
-    // after a deliberate jump across it (pending: +1 up, -1 down, already handled).
-    bool have_prev = false, certified = false;
-    float phi_prev = 0.0f, below_prev = 0.0f;
+  // One sample of the march: φ and what bounds the step from it (phase.h, harnack.h).
+  struct MarchSample {
+    vec3 x;
+    PhaseSample phase;
+    bool have_gradient = false;  // phase.gradient holds ∇w
+    float phi = 0.0f, radius = 0.0f;
+    LevelBracket levels;
+    float gap_below = 0.0f, gap_above = 0.0f, gap = 0.0f;
+    float ball = 0.0f;  // the radius free of levels about x
+  };
+
+  // What the march keeps of its previous sample (at t_prev): the step from it (rho_prev, and
+  // certified when that was a safe step, not a jump), φ there and its bracket's lower level, a
+  // level just jumped across on purpose (pending: +1 up, -1 down), and whether the next sample
+  // needs ∇w.
+  struct MarchMemory {
+    float t_prev = 0.0f, rho_prev = 0.0f, phi_prev = 0.0f, below_prev = 0.0f;
+    bool have_prev = false, certified = false, overstepped = false, gradient_wanted = false;
     int pending = 0;
+  };
+
+  enum class LevelStep { kNone, kJumped, kEnded };
+
+  // Near ∂M the stopping test needs ∇w at almost every step; then it comes with φ.
+  GWNRT_HD GWNRT_FORCEINLINE MarchSample sample_at(float t, bool gradient_wanted) const {
+    MarchSample s;
+    s.x = point(t);
+    s.phase = sample_phase(m_, s.x, o_.beta, gradient_wanted, o_.exact);
+    s.have_gradient = gradient_wanted;
+    s.phi = s.phase.phi;
+    s.radius = s.phase.boundary_distance;
+    s.levels = bracket_levels(s.phi, phase_);
+    s.gap_below = s.phi - s.levels.below;
+    s.gap_above = s.levels.above - s.phi;
+    s.gap = min_of(s.gap_below, s.gap_above);
+    s.ball = level_free_radius(s.radius, s.phase.gradient_bound, s.phi, s.levels);
+    return s;
+  }
+
+  GWNRT_HD GWNRT_FORCEINLINE void want_gradient(MarchSample& s) const {
+    if (!s.have_gradient) s.phase = sample_phase(m_, s.x, o_.beta, true, o_.exact);
+    s.have_gradient = true;
+  }
+
+  // φ continued from the previous sample: the nearest continuation, right for small changes; after
+  // a safe step, which may change φ by almost a whole period, the one inside φ_prev's bracket
+  // unless the nearest one is only round-off past its end.
+  GWNRT_HD GWNRT_FORCEINLINE float continued_phi(const MarchMemory& mem, float phi) const {
+    float d = phi - mem.phi_prev;
+    d -= floorf(d + 0.5f);
+    float lifted = mem.phi_prev + d;
+    if (mem.certified) {
+      const float over = max_of(mem.below_prev - lifted, lifted - (mem.below_prev + 1.0f));
+      if (!(over >= 0.0f && over <= kPhaseRoundOff)) lifted = phi - floorf(phi - mem.below_prev);
+    }
+    return lifted;
+  }
+
+  // The levels crossed since the previous sample move the band; w* itself, crossed by round-off
+  // (φ is within a few ulps of it), is a hit here. True when the trace ended.
+  GWNRT_HD GWNRT_FORCEINLINE bool settle_crossed_levels(int crossed, int pending, float t, MarchSample& s) {
+    if (crossed == 0) return false;
+    const int step = crossed > 0 ? 1 : -1;
+    if (step != pending && (!sheets_ || (band_ < 0) != (band_ + step < 0))) {
+      want_gradient(s);
+      const float gn = glm::length(s.phase.gradient);
+      if (gn > 0.0f && offer(t, HitKind::kSmooth, -s.phase.gradient / gn, kEmptyLane)) return true;
+    }
+    band_ += step;
+    return false;
+  }
+
+  // The safe step from s: its level-free ball, or the second-order step from the secant slope to
+  // the previous sample and the curvature bound when longer (it looks ahead only, leaning on the
+  // sample behind, so only after a safe step that crossed no level).
+  GWNRT_HD GWNRT_FORCEINLINE float step_radius(const MarchMemory& mem, int crossed, float t, float lifted,
+                                               const MarchSample& s) const {
+    float rho = s.ball;
+    const float delta = t - mem.t_prev;
+    if (crossed == 0 && mem.have_prev && mem.certified && delta > 0.0f && delta <= kCurvatureBallFraction * s.radius) {
+      const float slope = (lifted - mem.phi_prev) / delta;
+      const float curvature = curvature_bound(s.radius, s.phase.gradient_bound);
+      const float widen = 0.5f * curvature * delta;  // φ'(t) is the slope to within this
+      const float ahead = min_of(curvature_bound_step(s.gap_above, slope + widen, curvature),
+                                 curvature_bound_step(s.gap_below, widen - slope, curvature));
+      rho = fmaxf(rho, min_of(ahead, kCurvatureBallFraction * s.radius));
+    }
+    return rho;
+  }
+
+  // Within eps of a level by ∇w: a smooth hit where w crosses w* there, else a jump across the
+  // level (or on, moving away from it), checked on the far side. kNone when not that near.
+  GWNRT_HD GWNRT_FORCEINLINE LevelStep step_across_level(float& t, float rho, MarchSample& s, MarchMemory& mem) {
+    want_gradient(s);
+    const vec3 g = s.phase.gradient;
+    const float gn = glm::length(g);
+    if (!(s.gap <= eps_ * gn)) return LevelStep::kNone;
+    const bool at_above = s.gap_above <= s.gap_below;
+    const float rate = glm::dot(g, dir_);  // dw/dt
+    if (at_above ? rate > 0.0f : rate < 0.0f) {
+      const int step = at_above ? 1 : -1;
+      if ((!sheets_ || (band_ < 0) != (band_ + step < 0)) && offer(t, HitKind::kSmooth, -g / gn, kEmptyLane))
+        return LevelStep::kEnded;
+      // A level of w other than w* (or a hit the filter turned down): step across it and check
+      // on the far side.
+      mem.pending = step;
+      t += min_of(2.0f * s.gap / fabsf(rate) + eps_, 10.0f * eps_);
+    } else {
+      t += fmaxf(rho, eps_);  // moving away from the level (or grazing it): no crossing
+    }
+    mem.t_prev = t;
+    mem.rho_prev = 0.0f;
+    mem.have_prev = true;  // a jump, not a safe step
+    mem.certified = false;
+    mem.phi_prev = s.phi;
+    mem.below_prev = s.levels.below;
+    return LevelStep::kJumped;
+  }
+
+  // Harnack steps on φ over [t, t_end]; true when the trace ended (a hit, or a cap). Each step:
+  // sample, go back if an over-step was not covered, walk the crossings up to here, settle the
+  // levels crossed, then stop on, jump across or step safely toward the next level.
+  GWNRT_HD bool march(float t, float t_end) {
+    MarchMemory mem;
+    mem.t_prev = t;
     for (;;) {
       if (hit_.steps >= o_.max_steps) {
         hit_.capped = true;
         return true;
       }
       ++hit_.steps;
-      const vec3 x = point(t);
-      // Near ∂M the stopping test needs ∇w at almost every step; then it comes with φ.
-      PhaseSample sample = sample_phase(m_, x, o_.beta, gradient_wanted, o_.exact);
-      bool have_gradient = gradient_wanted;
-      const float phi = sample.phi, radius = sample.boundary_distance;
-      const LevelBracket levels = bracket_levels(phi, phase_);
-      const float gap_below = phi - levels.below, gap_above = levels.above - phi;
-      const float gap = min_of(gap_below, gap_above);
-      const float ball = level_free_radius(radius, sample.gradient_bound, phi, levels);
-      if (overstepped && t - t_prev > rho_prev + ball) {  // the long step was not covered
-        t = t_prev + rho_prev;
-        overstepped = false;
+      MarchSample s = sample_at(t, mem.gradient_wanted);
+      if (mem.overstepped && t - mem.t_prev > mem.rho_prev + s.ball) {  // the long step was not covered
+        t = mem.t_prev + mem.rho_prev;
+        mem.overstepped = false;
         continue;
       }
-      overstepped = false;
+      mem.overstepped = false;
       // No level lies in (t_prev, t): the crossings there come first.
       if (sheets_ && walk_crossings_until(t)) return true;
-      int crossed = 0;
-      float lifted = phi;  // φ continued from φ_prev
-      if (have_prev) {
-        float d = phi - phi_prev;
-        d -= floorf(d + 0.5f);
-        lifted = phi_prev + d;  // the nearest continuation: right for small changes
-        if (certified) {
-          // A safe step may change φ by almost a whole period: then the continuation is the one
-          // inside φ_prev's bracket, unless the nearest one is only round-off past its end.
-          const float over = max_of(below_prev - lifted, lifted - (below_prev + 1.0f));
-          if (!(over >= 0.0f && over <= kPhaseRoundOff)) lifted = phi - floorf(phi - below_prev);
-        }
-        crossed = int(floorf(lifted - phase_)) - int(floorf(phi_prev - phase_));
-      }
-      if (crossed != 0) {
-        const int step = crossed > 0 ? 1 : -1;
-        if (step != pending && (!sheets_ || (band_ < 0) != (band_ + step < 0))) {
-          // w* itself, crossed by round-off: the hit is here (φ is within a few ulps of it).
-          if (!have_gradient) sample = sample_phase(m_, x, o_.beta, true, o_.exact);
-          have_gradient = true;
-          const float gn = glm::length(sample.gradient);
-          if (gn > 0.0f && offer(t, HitKind::kSmooth, -sample.gradient / gn, kEmptyLane)) return true;
-        }
-        band_ += step;
-      }
-      pending = 0;
-      // The second-order step looks ahead only (it leans on the sample behind).
-      float rho = ball;
-      const float delta = t - t_prev;
-      if (crossed == 0 && have_prev && certified && delta > 0.0f && delta <= kCurvatureBallFraction * radius) {
-        const float slope = (lifted - phi_prev) / delta;
-        const float curvature = curvature_bound(radius, sample.gradient_bound);
-        const float widen = 0.5f * curvature * delta;  // φ'(t) is the slope to within this
-        const float ahead = min_of(curvature_bound_step(gap_above, slope + widen, curvature),
-                                   curvature_bound_step(gap_below, widen - slope, curvature));
-        rho = fmaxf(rho, min_of(ahead, kCurvatureBallFraction * radius));
-      }
-      gradient_wanted = gap <= eps_ * min_of(sample.gradient_bound, harnack_gradient_bound(radius, phi));
-      if (gradient_wanted) {
-        if (!have_gradient) sample = sample_phase(m_, x, o_.beta, true, o_.exact);
-        const vec3 g = sample.gradient;
-        const float gn = glm::length(g);
-        if (gap <= eps_ * gn) {
-          const bool at_above = gap_above <= gap_below;
-          const float rate = glm::dot(g, dir_);  // dw/dt
-          if (at_above ? rate > 0.0f : rate < 0.0f) {
-            const int step = at_above ? 1 : -1;
-            if ((!sheets_ || (band_ < 0) != (band_ + step < 0)) && offer(t, HitKind::kSmooth, -g / gn, kEmptyLane))
-              return true;
-            // A level of w other than w* (or a hit the filter turned down): step across it and
-            // check on the far side.
-            pending = step;
-            t += min_of(2.0f * gap / fabsf(rate) + eps_, 10.0f * eps_);
-          } else {
-            t += fmaxf(rho, eps_);  // moving away from the level (or grazing it): no crossing
-          }
-          t_prev = t;
-          rho_prev = 0.0f;
-          have_prev = true;  // a jump, not a safe step
-          certified = false;
-          phi_prev = phi;
-          below_prev = levels.below;
+      const float lifted = mem.have_prev ? continued_phi(mem, s.phi) : s.phi;
+      const int crossed = mem.have_prev ? int(floorf(lifted - phase_)) - int(floorf(mem.phi_prev - phase_)) : 0;
+      if (settle_crossed_levels(crossed, mem.pending, t, s)) return true;
+      mem.pending = 0;
+      const float rho = step_radius(mem, crossed, t, lifted, s);
+      mem.gradient_wanted = s.gap <= eps_ * min_of(s.phase.gradient_bound, harnack_gradient_bound(s.radius, s.phi));
+      if (mem.gradient_wanted) {
+        const LevelStep jump = step_across_level(t, rho, s, mem);
+        if (jump == LevelStep::kEnded) return true;
+        if (jump == LevelStep::kJumped) {
           if (t > t_end) return false;
           continue;
         }
@@ -304,15 +358,15 @@ class SurfaceTracer {
       if (t >= t_end) return false;
       const float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
       if (t + safe >= t_end) return false;
-      t_prev = t;
-      rho_prev = safe;
-      have_prev = true;
-      certified = rho >= 0.5f * eps_;  // a safe step (over-stepping keeps it safe or goes back)
-      phi_prev = phi;
-      below_prev = levels.below;
+      mem.t_prev = t;
+      mem.rho_prev = safe;
+      mem.have_prev = true;
+      mem.certified = rho >= 0.5f * eps_;  // a safe step (over-stepping keeps it safe or goes back)
+      mem.phi_prev = s.phi;
+      mem.below_prev = s.levels.below;
       if (o_.overstep) {
         t = min_of(t + kOverstepFactor * safe, t_end);
-        overstepped = true;
+        mem.overstepped = true;
       } else {
         t += safe;
       }
