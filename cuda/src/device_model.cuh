@@ -35,8 +35,8 @@ struct DeviceTriangleTree {
 };
 
 // Device memory a batch copies its inputs and results through, kept from batch to batch and
-// grown (by half again, at least to what is asked) when one needs more: a batch of queries no
-// longer pays two cudaMalloc and two cudaFree.
+// grown (by half again, at least to what is asked) when one needs more: a batch of queries
+// pays no cudaMalloc or cudaFree.
 class DeviceScratch {
  public:
   // At least `bytes` bytes (aligned for any element type). Fails naming the size.

@@ -1,4 +1,4 @@
-// ∂M and the small tree over it that serves distance-to-boundary (and, later, Harnack radii).
+// ∂M, its loops, the cone C over it and the spanning surface (gwnrt/geometry/boundary.h).
 #include <algorithm>
 #include <array>
 #include <cmath>

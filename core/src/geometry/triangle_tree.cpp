@@ -161,11 +161,8 @@ class MomentBuilder {
     // holds the balls through the farthest box corner of each of its lanes. It bounds every
     // triangle below, and is a little looser than the farthest corner of the node's own box
     // where the lanes sit unevenly about p̄, which is where the truncation error is largest.
-    // Measured against the alternatives (order 2, beta = 2, leaves expanded from 1.5 beta):
-    // max |Δw| over 1000 points of the 871k-triangle dragon is 1.9e-3 with this ball,
-    // 2.6e-3 with the node's box corner (HDK's choice), and the box corner needs beta = 2.2
-    // and the same work to match it; nesting every level (balls of balls) compounds with
-    // depth and costs twice the work for the same error.
+    // It beats the node's box corner (HDK's choice) and balls of balls at every level for the
+    // same work (docs/performance.md, queries).
     for (int i = 0; i < kBvhWidth; ++i) {
       if (node.child[i] == kEmptyLane) continue;
       total.radius = std::max(total.radius, glm::length(lanes[i].centre - total.centre) + corner[i]);

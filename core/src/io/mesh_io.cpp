@@ -53,8 +53,8 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
   ReadLimits limits;
   if (!is_obj) limits.text_end = io::ply_text_end;  // lines are checked in the header and an ASCII body
   if (Status s = read_file(path, data, limits); !s.ok()) return s;
-  // A UTF-8 byte-order mark (some Windows editors write one) is not content: left in, it glued
-  // itself to the first keyword and the OBJ reader skipped that line.
+  // A UTF-8 byte-order mark (some Windows editors write one) is not content: left in, it would
+  // glue itself to the first keyword and the OBJ reader would skip that line.
   std::string_view content = data;
   if (content.substr(0, 3) == "\xEF\xBB\xBF") content.remove_prefix(3);
 

@@ -68,10 +68,9 @@ Status read_stream(std::FILE* f, const std::string& name, uint64_t size_hint, co
   }
   LineCheck lines{limits.max_line_bytes};
   size_t text_end = limits.text_end ? kTextNotEnded : kAllText;
-  // The text's first 64 KiB are checked for control bytes as they arrive: /dev/urandom (whose
-  // newlines kept every line short) was read until memory ran out (300 MB/s, 23 GB) before the
-  // reader said it was not text. A text file has none there (a file with them in its comments
-  // is refused too).
+  // The text's first 64 KiB are checked for control bytes as they arrive: /dev/urandom's newlines
+  // keep every line short, so the line limit alone would read it until memory ran out. A text
+  // file has none there (a file with them in its comments is refused too).
   constexpr size_t kSniffBytes = size_t(1) << 16;
   size_t sniffed = 0;
   // The hint may be wrong (the file may change) and is none for a stream; one spare byte lets the

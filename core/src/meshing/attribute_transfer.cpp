@@ -1,7 +1,7 @@
 // The attribute transfer's driver (meshing/attribute_transfer.h): the per-vertex and per-face
 // passes over the TBB backend, then the seam split on the host. The split touches only the faces
-// that straddle a seam (a band one face wide along each seam: 0.3% of the faces of a 6-chart cube
-// at 64³), so it is a sort of their corners rather than a pass.
+// that straddle a seam (a band one face wide along each seam: a small share of the faces), so it
+// is a sort of their corners rather than a pass.
 #include "gwnrt/meshing/attribute_transfer.h"
 
 #include <algorithm>

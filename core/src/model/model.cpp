@@ -15,10 +15,9 @@ namespace gwnrt {
 namespace {
 
 // The centroid values are needed only to tell |w_o − w*| from 1/2. A first pass at a coarse
-// beta (max error 0.012 against beta = 4 on bunny_holes, teapot and the 871k dragon: 2 s for the
-// dragon, against 16 s at beta = 4) decides almost every triangle; those within
-// kSheetAmbiguity of the threshold, eight times that error, are evaluated again at the fine beta
-// (max error 5e-4 at beta = 3).
+// beta (max error about 0.01, at an eighth of the fine pass's time) decides almost every
+// triangle; those within kSheetAmbiguity of the threshold, eight times that error, are evaluated
+// again at the fine beta (docs/performance.md, the sheets).
 constexpr float kSheetBetaCoarse = 1.5f;
 constexpr float kSheetBetaFine = 4.0f;
 constexpr float kSheetAmbiguity = 0.1f;
@@ -202,8 +201,7 @@ Status GwnModel::set_sheet_level_locked(float level) const {
     // A large ∂M (auto's crossing threshold) whose clusters are long, an open fan of slivers
     // around one vertex: the multipole opens every cluster at every centroid, and C, a fan over
     // ∂M, the same. By crossings with the spanning surface instead (its triangles near the part
-    // of ∂M they span), exact: an open cone of 10^4 slivers 4.6 s -> 0.05 s, of 10^5 0.42 s
-    // (design.md §4).
+    // of ∂M they span), exact and O(log² n) a centroid (docs/design.md §4).
     Mesh spanning_mesh;
     if (options.sheet_method == WindingMethod::kAuto && sheet_method_ == WindingMethod::kTaylor &&
         clusters_are_long(triangles_.view())) {
@@ -255,9 +253,8 @@ Status GwnModel::set_sheet_level_locked(float level) const {
       ++sheet_count;
     }
   // Only distances are asked of the sheet tree: no moments. Most triangles sheets (a closed mesh
-  // at w* = 1/2): the triangle tree filtered to them instead of a tree built again (measured on
-  // the 871k dragon, 2 cores, with moments: 0.54 s built, 0.14-0.16 s filtered, of which 0.07 s
-  // was the copy of its arrays).
+  // at w* = 1/2): the triangle tree filtered to them instead of a tree built again, at a
+  // fraction of a build's cost.
   if (4 * sheet_count >= triangles_.triangle_ids.size()) {
     if (Status s = filter_triangle_tree(triangles_, is_sheet_flag, sheets_, TreeMoments::kWithout); !s.ok()) return s;
   } else {

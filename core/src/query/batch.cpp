@@ -37,8 +37,7 @@ Status parallel_map(const char* name, std::span<const In> in, size_t grain, std:
       } else {
         // The order scatters the items over the batch: each block's inputs are gathered and its
         // results scattered in loops of their own, whose misses overlap, instead of one miss
-        // per item stalling the evaluation (measured, one core, 1M points on bunny_holes,
-        // crossing w: 1.42 µs an item in shuffled order, 1.03 by blocks, 0.84 in input order).
+        // per item stalling the evaluation (docs/performance.md, batch order).
         constexpr size_t kBlock = 32;
         In block_in[kBlock];
         Out block_out[kBlock];
@@ -56,10 +55,8 @@ Status parallel_map(const char* name, std::span<const In> in, size_t grain, std:
 }
 
 // Points are evaluated in Morton order of a 2^10 grid over the model's box (points outside clamp
-// to its faces), so that consecutive queries touch the same parts of the trees. Measured on the
-// 871k dragon (one core, order 2, 100k points of the bench's mix): 4.9 µs a query shuffled,
-// 1.9 µs sorted, the trees' 47 MB not staying in cache otherwise. Batches under 16384 points are
-// visited in input order.
+// to its faces), so that consecutive queries touch the same parts of the trees: a large mesh's
+// trees do not stay in cache otherwise. Batches under 16384 points are visited in input order.
 inline constexpr size_t kSpatialOrderMinPoints = 16384;
 inline constexpr uint32_t kUnorderedSegments = 65536;
 
@@ -119,8 +116,7 @@ Status evaluate_points_with(const GwnModel& model, std::span<const vec3> points,
       [&](const vec3& x) { return evaluate_point(view, x, request); }, store,
       [&] {
         // The boundary distance alone reads only ∂M's tree, which below kUnorderedSegments stays in
-        // cache in any order: sorting cost more than the queries (1M points, 2 cores: the closed
-        // dragon's empty boundary 1.3e8 a second unsorted, 1.3e7 sorted; bunny_holes 9.8e6, 7.6e6).
+        // cache in any order: sorting would cost more than the queries.
         if (request.fields == kFieldBoundaryDistance && view.boundary.segment_count < kUnorderedSegments)
           return std::vector<uint64_t>();
         return spatial_order(view.bounds, points);

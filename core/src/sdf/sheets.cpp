@@ -18,8 +18,8 @@ namespace {
 // Lanes as oriented boxes, and which lie in one plane. A polygon fanned from one vertex is n
 // slivers that all meet there: every cluster of them holds that vertex and reaches across the
 // polygon, so its ball holds most of the polygon's centroids and the multipole sum opens it at
-// each, as a crossing ray from each meets most of their axis-aligned boxes: O(n) a triangle, the
-// classification of a 10^4-gon 4.6 s, of a 10^5-gon 267 s. But a triangle adds nothing to w at a
+// each, as a crossing ray from each meets most of their axis-aligned boxes: O(n) a triangle, O(n²)
+// the classification. But a triangle adds nothing to w at a
 // point of its own plane that it does not contain, and a box along a cluster's own axes is as
 // thin as its slivers: a centroid, or a ray, meets O(1) of them a level.
 //
@@ -83,11 +83,9 @@ struct PointStats {
 };
 
 // Whether the frames pay. A centroid lies within beta radii of about beta² Σ r² / A leaf lanes
-// (r their radii, A the area of the triangles they hold): Σ r² / A is 1.3-1.6 on the bundled
-// meshes and a 3·10^5-triangle sphere (55 near triangles a query on bunny_holes), 73 on a fanned
-// 10^3-gon, 1090 on a 10^4-gon: it grows with a fan's n. Below kLongClusters the classification
-// runs as before, without frames: their arrays' first touch alone took 0.16 s on 2 cores for the
-// sphere, whose whole classification by crossings takes 0.12 s.
+// (r their radii, A the area of the triangles they hold): Σ r² / A is about 1.5 on ordinary
+// meshes and grows with a fan's n. Below kLongClusters the classification runs without frames:
+// on an ordinary mesh their arrays' first touch alone costs about what the classification does.
 constexpr double kLongClusters = 32.0;
 }  // namespace
 
@@ -368,8 +366,7 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
     // triangle's stack (it and any triangle coincident with it at c): their difference is the
     // stack's jump k, their mean w_o at c to second order in δ. Along the normal, not along the
     // ray's axis: a tilted offset moves the two points apart across the plane too, and beside a
-    // sliver's neighbours w_o then errs by that shift times δ over the squared width (a tilted
-    // 10^4-gon's slivers by the fan's vertex were up to 3e-4 off the brute force's sides). δ is
+    // sliver's neighbours w_o then errs by that shift times δ over the squared width. δ is
     // far above the rounding of the centroid and of the vertices relative to it (a few ulps of the
     // coordinates), and far below any feature a mesh resolves. (Not c itself: a stacked copy that
     // is a loop of ∂M on its own has c as its cone's apex, where w_C is undefined.) A closed mesh

@@ -10,7 +10,7 @@
 // nvcc it is device code only: the CUDA backend only launches it, and a host copy (an extended
 // __host__ __device__ lambda gets one) brings host copies of all it calls, compiled without the
 // host's lanes (GWNRT_HOST_LANES is 0 under nvcc), which the linker may then pick for the CPU
-// code too: gwnrt_cuda_tests' CPU meshing and tracing ran nvcc's scalar sample_phase.
+// code of a binary that links both backends.
 #if defined(__CUDACC__)
 #define GWNRT_HD __host__ __device__
 #define GWNRT_PASS __device__

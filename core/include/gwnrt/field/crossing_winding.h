@@ -15,16 +15,10 @@ namespace gwnrt {
 
 // The cone's clusters are expanded (order 2) only beyond this multiple of their radius. The
 // crossing method promises |Δw| <= 1e-5 and ∇w to a relative 1e-4, where the tree's beta = 2
-// gives 1e-3; measured max |Δw| over 3000 points of the bench's mix (bunny_holes, the teapot, a
-// random non-manifold soup of 300 triangles with 724 cone triangles): beta 4: 6.0e-6, 6.9e-6,
-// 1.1e-5; 5: 2.3e-6, -, 2.0e-6; 6: 6.6e-7, 5.1e-7, 4.4e-7; 8: 1.3e-7, 1.3e-7, 4.4e-7. 5 keeps
-// a 4x margin and sums fewer cone triangles exactly than 6 (bunny_holes, 1M points: 30.2 -> 23.3
-// a query, and 0.49 -> 0.42 µs a query on one core in Morton order; max |Δw| 7.4e-7 -> 2.1e-6
-// over the bench's 18000 brute-force points).
+// gives 1e-3: 5 keeps a margin of about 4 on w and sums fewer cone triangles exactly than 6
+// (docs/performance.md, exact w by crossings).
 inline constexpr float kConeBeta = 5.0f;
-// ∇w and H_w (relative 1e-4 promised) need more: measured max error over tolerance on
-// bunny_holes and the teapot (points beyond 0.05 of the diagonal from M): beta 6: 17, 30; 8: 3.6,
-// 7.2; 12: 0.78, 0.41; 16: 0.08, 0.03 (Hessian 0.2, 0.09).
+// ∇w and H_w (relative 1e-4 promised) need more: 16 is the smallest tried that holds it.
 inline constexpr float kConeDerivativeBeta = 16.0f;
 
 struct CrossingStats {
@@ -120,7 +114,7 @@ struct ConeCrossingSum {
     // On the triangle (in its plane, not outside it), up to double round-off relative to its
     // corners' distances: w_C jumps there and the side is not defined, so the caller moves x off
     // C (w is continuous there, C is not part of M). On an edge the denominator is 0 only up to
-    // that round-off (found at a point on an inner edge of an axis-aligned cap).
+    // that round-off (a point on an inner edge of an axis-aligned cap).
     const double round_off = 1e-12 * corners.l0 * corners.l1 * corners.l2;
     on_cone |= fabs(numerator) <= round_off && tangent.denominator <= round_off;
     near_half_angles.add(numerator, tangent.denominator);
@@ -162,9 +156,8 @@ struct ConeCrossingVisitor {
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // w_C and C's jumps on the host: ConeCrossingSum<false, false>'s terms and decisions with a
 // node's far lanes expanded together and the near triangles four at a time in double, four angle
-// products side by side. On bunny_holes a crossing query sums 30 near cone triangles, which were
-// most of its time: measured on one core (300k points of the bench's mix in Morton order), 1.2 µs
-// a query scalar, 0.68-0.76 µs like this, the same w to the last bit of the sums compared.
+// products side by side: the near cone triangles are most of a crossing query's time, and the
+// lanes give the same w to the last bit of the sums compared.
 struct ConeCrossingLanes {
   const TriangleTreeView& cone;
   const RayFrame& frame;
@@ -254,7 +247,7 @@ GWNRT_HD GWNRT_FORCEINLINE float crossing_winding(const Cone& cone, int mesh_jum
 // the tree's near field decides it (winding_number.h: in double, point_on_triangle, where float
 // is ill-conditioned), so that the tree's sum taken there gives these triangles 0. The crossing
 // walk asks it of every leaf its axis ray meets, so that finding x on M costs a box test per leaf,
-// not a traversal of its own (one cost 0.11 µs a query on the closed bunny, half the query).
+// not a traversal of its own (which would double a query on a closed mesh).
 GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode& node, int lane, const vec3& x,
                                    float pad) {
   for (int k = 0; k < 3; ++k)
@@ -276,10 +269,9 @@ GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode&
 // denominator <= 0) is moved along a fixed direction by this many ulps of its largest coordinate,
 // or, near the origin, by 2^-40 of the model's box (the least that moves the corners relative to
 // x in double), up to kConeNudgeTries times (each 8x farther): w is continuous there, so the
-// moved point has the same w up to the move times |∇w| (measured 2e-6 at most beside the
-// teapot's rims, 2 ulps; 4 ulps gave 7e-6, the box's ulps 1.6e-5). It happens where x and a cap
-// of ∂M share exact coordinates (an axis-aligned hole and a grid of query points in its plane;
-// the hole's centre, its cone's apex, at the origin).
+// moved point has the same w up to the move times |∇w|, far within the 1e-5 promised. It happens
+// where x and a cap of ∂M share exact coordinates (an axis-aligned hole and a grid of query
+// points in its plane; the hole's centre, its cone's apex, at the origin).
 inline constexpr float kConeNudgeUlps = 2.0f;
 inline constexpr int kConeNudgeTries = 4;
 

@@ -42,9 +42,9 @@ GWNRT_HD inline ClosestPoint<T> closest_point_on_segment(const glm::vec<3, T>& a
 // The nearest point of a triangle to x, branch-free, for one triangle (T = float or double) or
 // one per lane (T = f4 on the host: a leaf's four at once). p[k][a]: corner k's coordinate a.
 // Four candidates: the foot of x on the plane when it falls inside (barycentrics from the
-// normal), and the nearest point of each edge; the nearest of them is the answer. Ericson's region
-// tests, which this replaced, rest on products of differences that float cannot resolve on a
-// needle (corners 1e-5 of its length apart): 0.0103 where the distance is 9.8e-5. A zero-area
+// normal), and the nearest point of each edge; the nearest of them is the answer. No region
+// tests (Ericson's): they rest on products of differences that float cannot resolve on a needle
+// (corners 1e-5 of its length apart). A zero-area
 // triangle has no foot inside (or its foot is a point of it anyway): its edges decide, as the
 // brute force measures it. Ties go to the face, then edges p0p1, p0p2, p1p2. Returns the squared
 // distance; u, v: barycentrics of the nearest point (point = (1 - u - v) p0 + u p1 + v p2).
@@ -66,7 +66,7 @@ GWNRT_HD GWNRT_FORCEINLINE T triangle_nearest(const T (&p)[3][3], const T (&x)[3
   // The foot: u = n·(x0 × e2)/|n|², v = n·(e1 × x0)/|n|² (x's height over the plane drops out),
   // the distance to it x's height (x0·n)²/|n|². n by differences of products to an ulp or two of
   // itself: a sliver's plane from products that cancel to its width (a foot computed from u and v
-  // erred across a sliver 1.5e-3 wide by ten ulps of the coordinates). Where u and v are off
+  // errs across a sliver by several ulps of the coordinates). Where u and v are off
   // (by about an ulp of x0 across the triangle) the edge's candidate is as near.
   const T n[3] = {difference_of_products(e1[1], e2[2], e1[2], e2[1]),
                   difference_of_products(e1[2], e2[0], e1[0], e2[2]),
@@ -77,7 +77,7 @@ GWNRT_HD GWNRT_FORCEINLINE T triangle_nearest(const T (&p)[3][3], const T (&x)[3
   const T fu = lane_select(nn > zero, dot(x0, m2) / nn, -one), fv = lane_select(nn > zero, dot(x0, m1) / nn, -one);
   const auto inside = (fu >= zero) & (fv >= zero) & (fu + fv <= one);
   // height · (height / |n|²), not height² / |n|²: height² is the sixth power of the lengths,
-  // which underflows float at the smallest served scales (a mesh 1e-8 across: the distance was 0).
+  // which underflows float at the smallest served scales (a mesh 1e-8 across).
   T d_face = lane_select(nn > zero, height * (height / nn), zero);
   d_face = lane_select(inside, d_face, zero + kInfinity);
   // The nearest, in the order of the ties: BC, AC, AB over each other, the face over them all.

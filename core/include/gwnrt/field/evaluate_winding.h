@@ -53,12 +53,8 @@ struct WindingOptions {
 // `auto` takes the crossing method when the cone has at most this many triangles per triangle
 // of M. A crossing query costs one ray through M's tree plus the cone's tree at kConeBeta
 // (nearer cone triangles exactly, in double); a Taylor query one traversal of M's tree at beta.
-// Measured (2 cores, the bench's point mix, crossing w / Taylor order-2 w, with the cone's near
-// triangles in lanes; runs on a shared machine vary by 15-30%): a closed mesh (no cone) 5.6-6.6x
-// on the 871k dragon, bunny_holes (0.015 cone triangles per triangle) 1.6-1.8x, the teapot
-// (0.065) 1.9x; the bunny less a random 1%, 2%, 5% of its triangles (0.028, 0.048, 0.146) 0.99x,
-// 0.92x, 0.28x. Where the two cost about the same the exact one is taken. A soup whose every
-// edge is on ∂M has three per triangle.
+// The threshold is about where the two cost the same (docs/performance.md), and there the exact
+// one is taken. A soup whose every edge is on ∂M has three per triangle.
 inline constexpr float kCrossingConeRatio = 0.1f;
 
 GWNRT_HD inline WindingMethod resolve_winding_method(const ModelView& m, WindingMethod requested) {

@@ -57,9 +57,9 @@ GWNRT_HD GWNRT_FORCEINLINE T cubic_form(const T* p, T dx, T dy, T dz) {
 // as in Moments.
 // Written in the unit direction u = d/r and ρ = 1/r, each order's term a form of u times a power
 // of ρ, nested (Ω = ρ²·(order 0 + ρ·(order 1 + ρ·order 2))): each moment of order m scales as a
-// length^(2+m), so each product stays near the size of its term whatever the mesh's scale. The
-// forms in d and 1/r^k (P(d,d,d)/r⁷) overflowed for a mesh 1e6 across or a point 1e12 away (w =
-// NaN: P(d,d,d) = inf against 1/r⁷ = 0). A point so far that r² overflows gets ρ = 0: no term.
+// length^(2+m), so each product stays near the size of its term whatever the mesh's scale (the
+// forms in d and 1/r^k overflow: P(d,d,d) = inf against 1/r⁷ = 0 for a mesh 1e6 across). A point
+// so far that r² overflows gets ρ = 0: no term.
 template <int Order, class T>
 struct FarFieldOmega {
   T inv_r, inv_r2;                   // ρ, ρ²

@@ -38,7 +38,7 @@ GWNRT_HD GWNRT_FORCEINLINE SolidAngleTangent<T> solid_angle_tangent(const glm::v
 // is that of |a||b||c| (`relative` of it: kOnTriangleRoundOff for double, as the cone's test in
 // crossing_winding.h), and not beside it (the denominator is > 0 at points of the plane outside
 // the triangle, <= 0 only on it). There Ω's one-sided limits are ±2π, and which one the signs
-// give is round-off (a cube's face diagonal gave w = -0.5, a tetrahedron's edge 1.152). On M, w
+// give is round-off (following them could put w at -0.5 on a cube's face diagonal). On M, w
 // is the mean of its limits, the average of w over a small sphere about x (1/2 on a face of a
 // closed mesh, the dihedral angle over 2π on an edge, the corner's solid angle over 4π at a
 // vertex): the triangles that x lies on count 0. The float near field decides it in double
@@ -203,8 +203,8 @@ struct EdgeField {
 
   GWNRT_HD EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj)
       : EdgeField(gi, gj, glm::length(gi), glm::length(gj)) {}
-  // Inlined everywhere: out of line in some translation units only (the tests'), its products
-  // were fused into FMAs differently there, and the same query gave results an ulp apart.
+  // Inlined everywhere: out of line in some translation units only, its products would be fused
+  // into FMAs differently there, and the same query would give results an ulp apart.
   GWNRT_HD GWNRT_FORCEINLINE EdgeField(const glm::vec<3, T>& gi, const glm::vec<3, T>& gj, T li, T lj) {
     e = gj - gi;
     c = glm::cross(gi, gj);
@@ -218,7 +218,7 @@ struct EdgeField {
   }
   GWNRT_HD glm::vec<3, T> gradient() const { return degenerate ? glm::vec<3, T>(0) : c * (f / c2); }
   // In float: x so near the edge's line that |c|² is near the denormals (1e-20 from a unit
-  // mesh's vertex: |c|² ~ 1e-40, and 0·inf made the gradient and the Hessian NaN). Such a
+  // mesh's vertex: |c|² ~ 1e-40, where 0·inf makes the gradient and the Hessian NaN). Such a
   // triangle is evaluated in double (below), as is one whose float terms overflow. On the line
   // itself (c = 0) the term is 0, as above. The bound is absolute, well above FLT_MIN (1.2e-38),
   // and below the |c|² of every point at ordinary distances from a mesh of the smallest size
@@ -235,9 +235,9 @@ GWNRT_HD inline bool finite(const Sym3<float>& h) { return is_finite(h.xx + h.xy
 // because float underflowed, where the Hessian's reach 1e40 (1/|c|²). They are large only by the
 // edge whose line x nearly lies on, and that edge's terms in the two triangles that share it are
 // exact negatives, so held at the same bound they still cancel (to 0 on a closed mesh), and a sum
-// of up to 30 of them stays finite; at float's own limit two made inf and then NaN. The bound is
-// far above any term that is not on its way to infinity: at 1e30 (1e-15 from an edge's line) it
-// cut a mesh 1e-7 across's Hessians, whose neighbouring triangles' terms cancel there.
+// of up to 30 of them stays finite (at float's own limit two would make inf and then NaN). The
+// bound is far above any term that is not on its way to infinity: a lower one (1e30) would cut
+// the Hessians of the smallest meshes served, whose neighbouring triangles' terms cancel there.
 GWNRT_HD inline float saturated_float(double v) {
   constexpr double kMax = 1e37;
   return float(v > kMax ? kMax : (v < -kMax ? -kMax : v));

@@ -47,8 +47,7 @@ GWNRT_HD GWNRT_FORCEINLINE void load_lane_moments(const TriangleTreeView& tree, 
 
 // A leaf (a few triangles) is expanded only from farther away than an inner cluster: summing
 // it exactly costs about what its expansion does, so the margin buys accuracy almost for free
-// (measured at beta = 2 on the bundled meshes and the full dragon: the same max error as never
-// expanding leaves, with 40-70% fewer exact triangle terms and 15-30% less time).
+// (docs/performance.md, queries).
 inline constexpr float kLeafExpansionScale = 1.5f;
 
 // Whether a lane's cluster is far enough to be expanded (scale2 = beta² for inner lanes, and
@@ -79,21 +78,14 @@ concept NearLeafVisitor = requires(Visitor& v, uint32_t first) {
 namespace detail {
 
 // visit_multipole for a FarLanesVisitor: the four lanes' tests and expansions at once, and the
-// near lanes sorted out by bit masks rather than a branch per lane. Measured on one core (order 2,
-// beta = 2, leaves of 4): lane by lane 3.8 µs a query on bunny_holes and 7.7 µs on the 871k
-// dragon; like this 1.3-1.5 µs and 4.7 µs. The full dragon's moments (47 MB) do not stay in cache
-// (the same points sorted in space run 2.5x faster), so each opened child is prefetched when
-// pushed, and its parent summed after the pushes to give the prefetches time: 4.7 -> 3.9 µs.
-// (A two-node delay between stack and visit, for more prefetch distance, measured no better.)
-// Only the child's node and the first line of its expansion: prefetching its moments too (7
-// more lines) cost more than it saved once batches ran in Morton order (one core, 1M points in
-// that order: the dragon 1.90 -> 1.77 µs without it, bunny_holes 1.48 -> 1.32-1.39 µs; shuffled
-// points on the dragon the same, 4.7-5.1 µs either way).
+// near lanes sorted out by bit masks rather than a branch per lane. A large mesh's moments do not
+// stay in cache, so each opened child is prefetched when pushed, and its parent summed after the
+// pushes to give the prefetches time; only the child's node and the first line of its expansion
+// (its moments too cost more than they save in Morton order). Timings: docs/performance.md.
 //
 // A visitor with far_lane_pair (Taylor w) is visited two nodes at a time where the CPU has AVX2:
 // both nodes' lanes tested and expanded as one 8-wide vector, and the opened children pushed
-// without a branch (compacted by a permutation). Measured on one core, 1M points of the bench's
-// mix, order 2, on the dragon: 1.7-1.8 -> 1.4 µs a query in Morton order, 4.3 -> 3.4 µs shuffled.
+// without a branch (compacted by a permutation).
 //
 // Pairs are visited only while sp <= PairsBelow, so a pair leaves at most PairsBelow + 6 entries
 // (and its push writes 8 lanes from sp - 2); from there single steps go depth-first, adding at
@@ -142,8 +134,8 @@ struct LaneTraversal {
       __builtin_prefetch(&tree.bvh.nodes[child].child);
       __builtin_prefetch(&tree.expansion[child]);
     }
-    // Whether or not a lane is far: most visited nodes have one (31 of 37 a query on
-    // bunny_holes), and the empty mask costs less than a mispredicted branch.
+    // Whether or not a lane is far: most visited nodes have one, and the empty mask costs less
+    // than a mispredicted branch.
     visitor.far_lanes(ni, far, dx, dy, dz);
     for (uint32_t leaves = near_bits & ~inner_bits; leaves != 0; leaves &= leaves - 1) {
       const int l = lowest_set_bit(leaves);
@@ -170,9 +162,8 @@ struct LaneTraversal {
     const uint32_t inner_bits = lane_bits(count == 0u);
     const uint32_t open = near_bits & inner_bits;
     // The opened children, lowest lane first, moved to the front of one vector and stored at
-    // once. Nothing is prefetched: prefetching the next two nodes to visit cost more than it
-    // saved (one core, 1M points, the dragon: 1.53 -> 1.40 µs a query without in Morton order,
-    // 3.47 -> 3.42 µs shuffled).
+    // once. Nothing is prefetched: prefetching the next two nodes to visit costs more than it
+    // saves.
     const u8 nibbles = (u8{} + kSetLaneNibbles[open]) >> u8{0, 4, 8, 12, 16, 20, 24, 28};
     const u8 pushed = u8(_mm256_permutevar8x32_epi32(__m256i(child), __m256i(nibbles & 15u)));
     __builtin_memcpy(&stack[sp], &pushed, sizeof pushed);
@@ -276,9 +267,8 @@ GWNRT_HD GWNRT_FORCEINLINE void add_cluster_far_field(const TriangleTreeView& tr
 // The near field is summed in float, but beside a long edge float has no digits left: where x
 // lies within a small fraction of an edge's length from that edge (or of the triangle's size from
 // its interior), van Oosterom's numerator and denominator are both far below |a||b||c|, the scale
-// of their round-off. A 10^4-gon fanned from one vertex (slivers 1 long, 3e-4 wide) gave w = 0.483
-// for 0.4999 at 1e-4 below its centre, and 0.31 off at worst within 1e-3 of it, while every far
-// cluster was right to 1e-10. Such a triangle (both below kNearConditioning |a||b||c|: the shape of
+// of their round-off: beside a fanned polygon's slivers float's w is off by tenths while every far
+// cluster is right. Such a triangle (both below kNearConditioning |a||b||c|: the shape of
 // point_on_triangle, with this looser bound) is evaluated in double, as the reference is; the
 // float error of any other is then at most a few ε / kNearConditioning (≈ 1.5e-5 rad).
 inline constexpr float kNearConditioning = 1.0f / 64;
@@ -425,8 +415,8 @@ GWNRT_FORCEINLINE f4 far_lanes_omega(const TriangleTreeView& tree, uint32_t node
 }
 
 // w (and ∇w) on the host: a node's far lanes expanded together (one f4 expansion per node), and
-// the near triangles kNearWidth at a time with a vector atan2 (lanes.h): the scalar atan2f alone
-// was 35% of the lane-by-lane time on bunny_holes. ∇w comes from the same far lanes and, for
+// the near triangles kNearWidth at a time with a vector atan2 (lanes.h): the scalar atan2f is a
+// large share of a lane-by-lane query. ∇w comes from the same far lanes and, for
 // each near triangle, from its edges in float, or in double where its lane found float
 // ill-conditioned, as the scalar visitor decides. H_w keeps the scalar visitor.
 template <int Order, bool WantGradient = false>
@@ -436,8 +426,7 @@ struct TaylorLanesSum {
   f4 far_omega{};
   fnear near_omega{};
   PendingTriangles<kNearWidth> pending{};
-  // ∇Ω's sums, only when asked: with them always there (zeroed, unused), w alone ran 12% slower
-  // (bunny, 2 cores: 2.2 -> 1.9 M/s).
+  // ∇Ω's sums, only when asked: with them always there (zeroed, unused), w alone runs slower.
   struct GradientSums {
     f4 far[3] = {};
 #if defined(__AVX2__)
@@ -478,8 +467,7 @@ struct TaylorLanesSum {
     pending.relative_to(x, g);
     const LaneTangent<fnear> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     fnear omega = 2.0f * lane_atan2(tangent.numerator, tangent.denominator);
-    // Ill-conditioned lanes (near_solid_angle_float) again in double: fewer than 0.003 a query on
-    // the bundled meshes, so a scalar loop.
+    // Ill-conditioned lanes (near_solid_angle_float) again in double: rare, so a scalar loop.
     const uint32_t ill = lane_bits(point_on_triangle(tangent.numerator, tangent.denominator, tangent.length_product,
                                                      kNearConditioning)) &
                          ((1u << pending.count) - 1u);

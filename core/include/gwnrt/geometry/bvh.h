@@ -86,8 +86,8 @@ struct TriangleTreeView {
   uint32_t triangle_count = 0;
   // x on one of the triangles counts 0 for it (solid_angle.h, point_on_triangle): set for M's
   // tree, where w on M is the mean of its one-sided limits; not for the cone C, which is not part
-  // of M and where the tracer needs the side its crossing count assumes (the mean broke the band
-  // of a ray starting on a planar polygon's cone).
+  // of M and where the tracer needs the side its crossing count assumes (the mean would break the
+  // band of a ray starting on a planar polygon's cone).
   bool mean_on_triangles = false;
 };
 

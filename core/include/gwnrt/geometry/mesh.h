@@ -30,22 +30,18 @@ struct Mesh {
 // `source` names the mesh in messages.
 Status validate_mesh(const Mesh& mesh, const std::string& source = "mesh");
 
-// The scales gwnrt serves (GwnModel::build refuses others, saying so). Every query is in float:
-// products of three or four lengths (van Oosterom's denominator, the point-triangle distance)
-// overflow or fall into denormals outside this range, and measured on a tetrahedron scaled by
-// 10^k the answers were right from 1e-10 to 1e8 and wrong beyond (distances 1.4x too large at
-// 1e10, trace normals 0 at 1e10 and NaN at 1e20, w = 0 inside at 1e-16): the coordinates of the
-// triangles' corners lie within +-kMaxMeshCoordinate, and their box is at least kMinMeshExtent
-// across along its longest side and, along its diagonal, kMinMeshExtentPerCoordinate of its
-// largest coordinate.
+// The scales gwnrt serves (GwnModel::build refuses others, saying so; docs/design.md §1). Every
+// query is in float: products of three or four lengths (van Oosterom's denominator, the
+// point-triangle distance) overflow or fall into denormals outside this range: the coordinates of
+// the triangles' corners lie within +-kMaxMeshCoordinate, and their box is at least kMinMeshExtent
+// across along its longest side and, along its diagonal, kMinMeshExtentPerCoordinate of its largest
+// coordinate.
 inline constexpr float kMaxMeshCoordinate = 1e8f;
 inline constexpr float kMinMeshExtent = 1e-8f;
 // Far from the origin float resolves a mesh coarsely: a point's coordinates round to a step of
-// 1.2e-7 of their magnitude. Measured on a unit tetrahedron moved by o along (1,1,1): right (to
-// the rounding of the points themselves) up to o = 1e5 (box diagonal 1.7e-5 of o), the sdf 26%
-// off at 3e5 and S empty at 1e6 (the sheets' probe step, 2e-6 of the coordinates, then spans the
-// mesh). The box's diagonal must be at least this fraction of its largest coordinate (6x the last
-// right case; about 840 float steps across the box).
+// 1.2e-7 of their magnitude, and the sheets' probe step (2e-6 of the coordinates) must stay
+// within the mesh. The box's diagonal must be at least this fraction of its largest coordinate
+// (about 840 float steps across the box, with a margin over the smallest that is still right).
 inline constexpr float kMinMeshExtentPerCoordinate = 1e-4f;
 Status check_mesh_scale(const Mesh& mesh);
 

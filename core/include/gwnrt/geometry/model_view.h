@@ -60,10 +60,10 @@ struct ModelView {
 
 // Whether w can reach `level` anywhere: w sums one solid angle in (-2π, 2π) over 4π per triangle,
 // so |w| < n/2 for n triangles, and ∂{w > level} is empty for |level| >= n/2. The tracer and the
-// mesher give no surface for such a level (a level of 3e9 overflowed the tracer's integer band,
-// and it reported sheet hits with flipped normals where w never gets near it); the programs say
-// why. `triangle_count` may also count zero-area triangles (a mesh's own count, before the model
-// leaves them out of its tree): they add nothing to w, so the bound holds, if less tight.
+// mesher give no surface for such a level (a huge level would overflow the tracer's integer band);
+// the programs say why. `triangle_count` may also count zero-area triangles (a mesh's own count,
+// before the model leaves them out of its tree): they add nothing to w, so the bound holds, if less
+// tight.
 GWNRT_HD inline bool level_within_reach(uint32_t triangle_count, float level) {
   return fabsf(level) < 0.5f * float(triangle_count);
 }

@@ -248,8 +248,8 @@ GWNRT_HD GWNRT_FORCEINLINE bool axis_ray_meets_lane(const WideNode& node, int la
 }
 
 // The same for the four lanes at once, as a bit mask. Empty lanes have inverted boxes and never
-// pass. On the host as one f4 test: the compiler kept the lane loop scalar (runtime axis
-// indices), and on the 871k dragon's sheet rays that was the largest part of the walk.
+// pass. On the host as one f4 test: the compiler keeps the lane loop scalar (runtime axis
+// indices), and on large meshes this test is the largest part of the walk.
 GWNRT_HD GWNRT_FORCEINLINE uint32_t axis_ray_lane_mask(const WideNode& node, const RayFrame& f, float t_min) {
 #if GWNRT_HOST_LANES
   return lane_bits(detail::axis_box_meets<f4>(load4(node.lo[f.kx]), load4(node.hi[f.kx]), load4(node.lo[f.ky]),
@@ -338,8 +338,7 @@ GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertic
       if (!lane_hook(ni, node, l)) continue;
       if (node.count[l] == 0) {
 #if GWNRT_HOST_LANES
-        // The walk is bound by node loads (perf on the dragon's sheet rays: the node's first
-        // load and its child fetch took the largest shares): start each child's load now.
+        // The walk is bound by node loads: start each child's load as soon as it is pushed.
         __builtin_prefetch(bvh.nodes + node.child[l]);
         __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes + node.child[l]) + 64);  // a node is 2 lines
 #endif

@@ -18,8 +18,8 @@ namespace gwnrt {
 // as '?', cut after 40 characters (it may be binary garbage or a megabyte long).
 std::string quoted_token(std::string_view token);
 
-// The line length the mesh readers accept: an OBJ polygon of 5 million corners fits (measured:
-// reading /dev/zero up to it takes a few tenths of a second).
+// The line length the mesh readers accept: an OBJ polygon of 5 million corners fits, and reading
+// /dev/zero up to it takes a fraction of a second.
 inline constexpr uint64_t kMaxMeshLineBytes = uint64_t(64) << 20;
 
 struct ReadLimits {

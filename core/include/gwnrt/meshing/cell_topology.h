@@ -71,7 +71,7 @@ GWNRT_HD constexpr bool edge_crossed(uint32_t inside, int e) {
 // face's quads, an edge of four triangles: so that face's pairing is flipped (both cells read the
 // same two patterns, so they agree). After the flip neither cell's loop passes the face twice:
 // the inside corners' path and an outside corners' path could not both cross the rest of the
-// cube's surface. On the 202k dragon at 512³ this removed all 3 non-manifold edges.
+// cube's surface.
 GWNRT_HD constexpr bool tunnel_through_face(uint32_t inside, int face) {
   const CellFace f = cell_face(face);
   const uint32_t a = (inside >> f.corner[0]) & 1u, b = (inside >> f.corner[1]) & 1u;
@@ -162,8 +162,9 @@ GWNRT_HD constexpr int packed_component(uint32_t packed, int edge) { return int(
 
 #if !defined(__CUDACC__)
 // On the host the 256 patterns are tabulated at compile time: the cell passes read them for every
-// cell S crosses, several times, and the loop tracing was a third of the mesher's time (perf, the
-// bunny at 256³). The device computes them (a table there would have to be copied to constant memory).
+// cell S crosses, several times, and tracing the loops each time would be a large share of the
+// mesher's time. The device computes them (a table there would have to be copied to constant
+// memory).
 inline constexpr std::array<uint32_t, 256> kPackedCellComponents = [] {
   std::array<uint32_t, 256> table{};
   for (uint32_t mask = 0; mask < 256; ++mask) table[mask] = pack_components(cell_components(mask));

@@ -58,9 +58,8 @@ GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local)
 // The corners need w exactly only where its sign is in doubt: a column is first evaluated with
 // the cone's clusters expanded beyond kCornerScreenBeta radii, and only the corners within
 // kCornerScreenMargin of the level again at the crossing method's own beta. The expansion's error
-// at beta 2 is about 1e-3 (the tree's, measured at most 1.7e-3 on the bench's points), so the
-// margin is ten times that; off it the sign, which is all the mesh's topology reads, is the exact
-// one.
+// at beta 2 is about 1e-3 (docs/design.md §2), so the margin is ten times that; off it the sign,
+// which is all the mesh's topology reads, is the exact one.
 inline constexpr float kCornerScreenBeta = 2.0f;
 inline constexpr float kCornerScreenMargin = 2e-2f;
 
@@ -267,8 +266,8 @@ GWNRT_HD inline uint32_t flipped_faces(const SparseGridView& view, const GridCoo
 }
 
 // The cells around each crossing edge, marked (cell_parts = 1) so that the count reads the
-// corners of those cells only: on the 202k dragon at 512³ one cell in 16 of the slots' cells has
-// a crossing edge, and reading every cell's corners was 9% of the mesher's time (perf).
+// corners of those cells only: few of the slots' cells have a crossing edge, and reading every
+// cell's corners would be a noticeable share of the mesher's time.
 struct CellMarkPass {
   SparseGridView view;
   const uint64_t* edges;
@@ -341,15 +340,12 @@ struct CellVertexPass {
     const uint32_t first = view.cell_vertex_offset[item];
     for (uint32_t p = 0; p < count; ++p) {
       // Kept in the cell itself. A sharp edge passing just outside a cell whose grid edges both
-      // its faces cross has its QEF minimum outside the cell (a turned cube: up to 0.26 cell out),
-      // and the clamped vertex lies off the edge; letting such vertices out by a third of a cell
-      // put them on the edge but made the output intersect itself (bunny_holes at 128³ and 256³:
-      // 10 and 16 triangle pairs; 0 clamped). A cell with two or more components (two sheets, a
-      // thin part) keeps each vertex in the box of its own component's Hermite points: clamped
-      // to the cell, the components' vertices fell onto the same cell edge and their triangles
-      // overlapped (the bunny at 256³ and 512³: 16 pairs each, now 2 and 0; the 202k dragon at
-      // 512³: 28, now 25). Single components keep the whole cell: a cube's corner lies outside
-      // its crossings' box.
+      // its faces cross has its QEF minimum outside the cell, and the clamped vertex lies off the
+      // edge; letting such vertices out of the cell makes the output intersect itself. A cell
+      // with two or more components (two sheets, a thin part) keeps each vertex in the box of its
+      // own component's Hermite points: clamped to the cell, the components' vertices can fall
+      // onto the same cell edge and their triangles overlap. Single components keep the whole
+      // cell: a cube's corner lies outside its crossings' box. (docs/performance.md, meshing.)
       const dvec3 x = count > 1 ? solve_qef(qef[p], box_lo[p], box_hi[p]) : solve_qef(qef[p], dvec3(0.0), dvec3(1.0));
       positions[first + p] = lo + vec3(x) * view.grid.cell;
       const dvec3 n = qef[p].normal_sum;
@@ -426,7 +422,7 @@ struct QuadPass {
     // to the edge, and S crosses the edge at its Hermite point: the split that crosses the edge
     // nearer that point is taken. Along a sharp feature this keeps the fold on the feature (two
     // of the four vertices lie on it), where the flatter split would cut it off by up to half a
-    // cell (the cube's edges: 0.2-0.25 cell off with the flatter split, measured).
+    // cell.
     const vec3 origin = view.grid.corner_position(g);
     const float target = hermite[i].point[a];
     const float off02 =

@@ -1,4 +1,4 @@
-// Meshing S = ∂{w > w*}: sparse, manifold dual contouring on a grid (docs/design.md, meshing).
+// Meshing S = ∂{w > w*}: sparse, manifold dual contouring on a grid (docs/design.md §11).
 // The output is closed by construction: its faces are dual to the grid edges whose corner
 // signs differ, and the signs are exact wherever the winding method is.
 #pragma once

@@ -64,11 +64,10 @@ GWNRT_HD inline bool clip_line_to_box(const dvec3& x, const dvec3& d, const dvec
 // retained directions x slides along the crease line (where the error stays minimal) to the
 // nearest point inside; with three (a corner outside the cell), the crease of the two strongest
 // planes is taken, at its point nearest the corner. Only a line that misses the cell is clamped.
-// On the turned cube at 24³ this puts the vertex of every cell the edge passes through on the
-// edge (clamping left some 0.14 cell off). Letting the vertex follow the crease out of its cell
-// (0.3 cell at most) would also bring the cells the edge passes just outside of onto it (their
-// clamped vertices cut the edge by up to 0.25 cell), but it made bunny_holes at 256³
-// self-intersect (4 pairs), so the cell bounds the vertex.
+// This puts the vertex of every cell a sharp edge passes through on the edge, where clamping
+// leaves it off. Letting the vertex follow the crease out of its cell would also bring the cells
+// the edge passes just outside of onto it, but makes the output self-intersect, so the cell
+// bounds the vertex (docs/performance.md, meshing).
 GWNRT_HD inline dvec3 solve_qef(const Qef& q, const dvec3& lo, const dvec3& hi) {
   const dvec3 mass = q.mass_point();
   double lambda[3];

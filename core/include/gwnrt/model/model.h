@@ -35,15 +35,15 @@ struct BuildOptions {
   // the sdf and sheet-distance queries.
   bool classify_sheets = true;
   float sheet_level = 0.5f;
-  // How the centroids' w is evaluated: crossing (exact; for the 871k dragon on 2 cores about the
-  // tree build's time), taylor (the multipole tree, two passes, about ten tree builds; decided
-  // within kSheetSideTolerance), or auto (resolve_winding_method). brute is refused (n² terms).
+  // How the centroids' w is evaluated: crossing (exact; about a tree build's time), taylor (the
+  // multipole tree, two passes, about ten tree builds; decided within kSheetSideTolerance), or
+  // auto (resolve_winding_method). brute is refused (n² terms).
   WindingMethod sheet_method = WindingMethod::kAuto;
   // Build M's tree now and the other parts (the boundary and cone; the sheets, when
   // classify_sheets) on first need: GwnModel::prepare, which the batch drivers call with what a
-  // request reads. A query of distances to M alone then never pays for them (871k dragon, 2
-  // cores: the tree 0.6 s, the boundary and cone 0.22 s, the sheets 0.4 s). Off by default, so
-  // that build() reports every failure and a model's view() is whole; gwnrt-query defers.
+  // request reads. A query of distances to M alone then never pays for them (about half a large
+  // mesh's build). Off by default, so that build() reports every failure and a model's view() is
+  // whole; gwnrt-query defers.
   bool defer_parts = false;
 };
 

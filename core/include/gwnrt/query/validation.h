@@ -14,9 +14,9 @@
 namespace gwnrt {
 
 // The query points the drivers serve: finite, every coordinate within +-kMaxQueryCoordinate
-// (beyond, the squared distances to M overflow float: the distances came out NaN from 1e19 and
-// the sdf negative; within it, measured on the limits of kMaxMeshCoordinate and
-// kMinMeshExtent, w, the distances and the sdf are right). Names the first point that is not.
+// (beyond, the squared distances to M overflow float and the distances and the sdf's sign go
+// wrong; within it, at the limits of kMaxMeshCoordinate and kMinMeshExtent, w, the distances and
+// the sdf are right). Names the first point that is not.
 inline constexpr float kMaxQueryCoordinate = 1e18f;
 // Whether `p` is such a point (NaN and inf are not).
 inline bool query_point_served(const vec3& p) {

@@ -135,9 +135,8 @@ GWNRT_HD inline float level_set_distance_bound(const ModelView& m, const vec3& x
   const float phase = level - floorf(level);
   PhaseSample p = sample_phase(m, x, beta, false);
   LevelBracket levels = bracket_levels(p.phi, phase);
-  // The cone's expansion is off by up to ~3e-4 in φ at beta = 2 (bunny_holes); within a few
-  // times that of a level the ball would be sized by the error, not by φ, and could reach past
-  // the level (found by the accuracy study: ρ above the true distance within 1e-6 of a cap). There
+  // The cone's expansion is off by up to a few 1e-4 in φ at beta = 2; within kExactPhaseGap of a
+  // level the ball would be sized by that error, not by φ, and could reach past the level. There
   // φ is summed exactly, over the cone only (one triangle per boundary segment).
   if (min_of(p.phi - levels.below, levels.above - p.phi) < kExactPhaseGap) {
     p = sample_phase(m, x, beta, false, true);

@@ -47,7 +47,7 @@ GWNRT_HD inline float harnack_gradient_bound(float radius, float phi) {
   return 3.0f * (phi - kAngleLowerBound) / radius;
 }
 
-// The second safe step, from a bound K on |∇φ| at the centre of the ball (boundary_field.h).
+// The second safe step, from a bound K on |∇φ| at the centre of the ball (phase.h).
 // Every point of ∂M is at least R away, so on the segment [x, x + θR·d] the Biot–Savart bound
 // grows at most to K / (1 - θ)²; φ cannot move by `gap` (its distance to the nearer level)
 // while θR·K / (1 - θ)² < gap. The largest such θ, with p = RK / gap, is the root of
@@ -89,8 +89,7 @@ GWNRT_HD inline float curvature_bound_step(float gap, float slope, float curvatu
 // Over-stepping (the paper's §3.1.4): try this multiple of the safe step; the longer step is
 // kept only when the safe balls of both of its ends cover it. The paper's 1.75 suits Harnack
 // steps alone, which are far shorter than they need be; next to the Lipschitz and second-order
-// steps it fails often enough to cost time (bunny_holes, 256x192 camera rays: 1.0 0.335 µs per
-// ray, 1.2 0.306, 1.3 0.297, 1.4 0.29, 1.5 0.30, 1.75 0.44 before the second-order step).
+// steps it fails often enough to cost time (docs/performance.md, tracing).
 inline constexpr float kOverstepFactor = 1.3f;
 inline constexpr float kPaperOverstepFactor = 1.75f;  // for a tracer with Harnack steps only
 

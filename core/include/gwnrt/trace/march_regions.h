@@ -33,9 +33,8 @@ GWNRT_HD inline float level_distance(float level) {
 // Crossings live in M's box; it is padded because the crossing of a triangle lying in a face of
 // the box is rounded differently from the box clip and may fall just outside it.
 // The pad is also at least 4 float steps of the box's coordinates: far from the origin 1e-4 of
-// the diagonal is below one (a unit tetrahedron at 1e4, where steps are 1e-3), the box was not
-// padded at all, and the mesher's grid, centred on it, put its corners exactly on the faces
-// (zero-area triangles at every resolution).
+// the diagonal can be below one step, and the mesher's grid, centred on an unpadded box, would
+// put its corners exactly on M's faces (zero-area triangles at every resolution).
 GWNRT_HD inline Aabb crossing_box(const ModelView& m) {
   Aabb padded = m.bounds;
   const vec3 largest = glm::max(glm::abs(m.bounds.lo), glm::abs(m.bounds.hi));
