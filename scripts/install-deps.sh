@@ -5,6 +5,7 @@
 # headers): a benchmark's baseline only, left out of CI, where compiling OpenVDB's mesher into
 # each build configuration would cost minutes.
 # --ci adds ccache, with which CI's Release build and other configurations share objects.
+# --packages P... installs just those (check.sh optional: OpenVDB half-installed, then whole).
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
           libtbb-dev libglm-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev
@@ -13,6 +14,7 @@ packages=(cmake ninja-build g++ pkg-config
 case "${1:-}" in
   --baselines) packages+=(libopenvdb-dev libboost-dev libboost-iostreams-dev) ;;
   --ci) packages+=(ccache) ;;
+  --packages) shift; packages=("$@") ;;
 esac
 missing=()
 for p in "${packages[@]}"; do
