@@ -18,8 +18,8 @@
 #                                      libboost-iostreams-dev), then whole; installs them (apt)
 #   bash scripts/check.sh all          all seven, in that order
 # The TSan build is RelWithDebInfo: its suppressions name frames inside TBB's headers, which only
-# debug information keeps once they are inlined (a Release build reports ~4200 races inside the
-# model build's TBB tasks that RelWithDebInfo attributes and suppresses).
+# debug information keeps once they are inlined (without it the model build's TBB hand-overs are
+# reported as races: docs/design.md §10).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="$(nproc)"
@@ -35,14 +35,15 @@ check_layers() {
 }
 
 check_sanitize() {
-  # -O1 -g1: on CI's 2 cores the build takes 9.7 min against 19 at RelWithDebInfo's -O2 -g, and the
-  # suite runs as fast (4.3 min); line tables are all ASan's and UBSan's reports need.
+  # -O1 -g1: half the build time of RelWithDebInfo's -O2 -g, the suite as fast (docs/performance.md);
+  # line tables are all ASan's and UBSan's reports need.
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
     -DGWNRT_SANITIZE=address,undefined -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_WERROR=ON
   # The tests and every program they run (test_fuzz_inputs.cpp runs them all on hostile input).
   cmake --build build-asan --parallel "$jobs" --target gwnrt_tests gwnrt_thread_tests gwnrt_embree_tests \
     gwnrt_render_tests gwnrt-query gwnrt-render gwnrt-sdf-study gwnrt-mesh gwnrt-trace gwnrt-bench-trace \
-    gwnrt-bench-query gwnrt-bench-mesh gwnrt-consistency gwnrt-library-example gwnrt-embree-example
+    gwnrt-bench-query gwnrt-bench-mesh gwnrt-consistency gwnrt-library-example gwnrt-engine-example \
+    gwnrt-embree-example
   # Any UBSan report fails its test (no recovery); leaks are reported at exit.
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure --parallel "$jobs"
