@@ -57,7 +57,7 @@ check_tsan() {
   # caller's stack, whose slot the caller reuses after the join TSan cannot see; with the default
   # history the worker's stack was lost ("failed to restore the stack", 1 run in 2 of
   # gwnrt_thread_tests) and the suppression, which needs its TBB frames, could not match.
-  local options="suppressions=$PWD/tests/embree/tsan.supp halt_on_error=1 history_size=7"
+  local options="suppressions=$PWD/tests/plugin/tsan.supp halt_on_error=1 history_size=7"
   TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_thread_tests
   TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_embree_tests
 }
@@ -96,9 +96,9 @@ print('check downstream: installed gwnrt package:', m, 'w =', m.winding_number([
 }
 
 check_configs() {
-  # Only test_trace.cpp and bench_trace.cpp compile differently without Embree (GWNRT_HAVE_EMBREE:
-  # the tracer against Embree's own triangle test); the rest is the Release build's code. The
-  # configuration itself checks the CMake logic.
+  # Only tests/trace/test_surface_trace.cpp and bench_trace.cpp compile differently without Embree
+  # (GWNRT_HAVE_EMBREE: the tracer against Embree's own triangle test); the rest is the Release
+  # build's code. The configuration itself checks the CMake logic.
   cmake -S . -B build-noembree -G Ninja -DGWNRT_WITH_EMBREE=OFF -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
   cmake --build build-noembree --parallel "$jobs" --target gwnrt_tests gwnrt-bench-trace
   ctest --test-dir build-noembree --output-on-failure --parallel "$jobs" -R '^TraceWatertight'

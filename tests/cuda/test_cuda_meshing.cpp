@@ -11,9 +11,9 @@
 #include <cstdio>
 #include <string>
 
-#include "../test_util.h"
 #include "gwnrt/cuda.h"
 #include "gwnrt/meshing/mesh_comparison.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

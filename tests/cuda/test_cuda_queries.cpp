@@ -6,8 +6,8 @@
 #include <limits>
 #include <string>
 
-#include "../test_util.h"
 #include "gwnrt/cuda.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "../test_util.h"
 #include "render/camera.h"
 #include "render/integrators/first_hit.h"
+#include "test_util.h"
 
 #if defined(GWNRT_HAVE_CUDA)
 #include "render/integrators/first_hit_cuda.h"

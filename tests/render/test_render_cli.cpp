@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "../cli_util.h"
-#include "../mesh_files.h"
-#include "../test_util.h"
+#include "cli_util.h"
 #include "gwnrt/base/memory.h"
+#include "mesh_files.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "../cli_util.h"
-#include "../mesh_files.h"
-#include "../test_util.h"
+#include "cli_util.h"
+#include "mesh_files.h"
 #include "render/image_output.h"
 #include "render/integrators/path.h"
 #include "render/render_scene.h"
 #include "render/scene.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {

@@ -21,11 +21,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "../cli_util.h"
-#include "../test_util.h"
+#include "cli_util.h"
 #include "render/integrators/path.h"
 #include "render/render_scene.h"
 #include "render/scene.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {

@@ -13,8 +13,8 @@
 #include <thread>
 #include <vector>
 
-#include "../test_util.h"
 #include "gwnrt/query/batch.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

@@ -275,7 +275,7 @@ TEST(MeshingQef, EigenDecompositionReconstructsTheMatrix) {
 }
 
 // The corner pass's shared ray: every point of a line gets the w that winding_number_crossing
-// gives it alone (which tests/test_crossing_winding.cpp checks against the brute force).
+// gives it alone (which tests/field/test_crossing_winding.cpp checks against the brute force).
 TEST(MeshingCorners, WindingAlongAnAxisIsEachPointsOwn) {
   for (const char* name : {"bunny_holes.obj", "bunny.obj", "teapot.obj"}) {
     const GwnModel model = test::build_model(test::load_test_mesh(name));
@@ -339,7 +339,7 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
 // Whole meshes.
 
 // Closed, manifold (edges and vertices) and consistently oriented, by the quality report's
-// topology (tests/test_mesh_quality.cpp checks it on analytic cases); with up to
+// topology (tests/meshing/test_mesh_quality.cpp checks it on analytic cases); with up to
 // `degenerate_allowed` zero-area triangles (whose edges still count).
 void expect_closed_oriented(const SurfaceMesh& m, const std::string& what, uint64_t degenerate_allowed = 0) {
   MeshTopology t;

@@ -21,8 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "../cli_util.h"
-#include "../test_util.h"
+#include "cli_util.h"
 #include "gwnrt/embree.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/trace/surface_trace.h"
@@ -30,6 +29,7 @@
 #include "render/camera.h"
 #include "render/embree_ray.h"
 #include "render/embree_triangles.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
