@@ -1,6 +1,6 @@
-// gwnrt-trace run as a subprocess on georeferenced input (MeshLoadOptions::recentre): a mesh and
+// gwnrt-trace run as a subprocess: on georeferenced input (MeshLoadOptions::recentre) a mesh and
 // rays far from the origin are traced about the mesh's own centre, the hit positions written back
-// in the input's coordinates.
+// in the input's coordinates; at a level w never reaches every ray misses, and a warning says why.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -224,6 +224,23 @@ TEST_F(TraceCliTest, MeshThatWasRefusedAsFarOffIsTraced) {
   EXPECT_NEAR(cell_double(rows[1][4]), kUtm[2] + 0.25, 1e-6);
   EXPECT_EQ(rows[1][5] + "," + rows[1][6] + "," + rows[1][7], "-1,0,0");
   EXPECT_EQ(rows[2][0], "0");
+}
+
+TEST(UnreachableLevelCli, TraceSaysTheSurfaceIsEmpty) {
+  // gwnrt-trace at the level 3e9: every ray misses (no sheet hit with a flipped normal)
+  // and a warning says why.
+  const std::string binary = test::program_binary("gwnrt-trace");
+  if (binary.empty()) GTEST_SKIP() << "gwnrt-trace not built next to the tests";
+  const std::string rays = test::temp_path("rays") + ".txt";
+  std::ofstream(rays) << "-1 0.1 0.05 1 0 0\n0.05 -1 0.1 0 1 0\n";
+  for (const std::string level : {"3e9", "-3e9", "1e30"}) {
+    const test::RunResult run = test::run_program(
+        binary, test::quote(test::data_path("bunny_holes.obj")) + " --rays " + test::quote(rays) + " --level " + level);
+    ASSERT_TRUE(run.exited) << level;
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.err.find("outside every value w takes"), std::string::npos) << run.err;
+    EXPECT_EQ(run.out.find(",sheet,"), std::string::npos) << run.out;
+  }
 }
 
 }  // namespace
