@@ -31,6 +31,7 @@
 #include "apps/common/load_model.h"
 #include "apps/common/program.h"
 #include "gwnrt/base/memory.h"
+#include "gwnrt/geometry/exact_predicates.h"
 #include "gwnrt/geometry/ray.h"
 #include "gwnrt/meshing/extract_surface.h"
 #include "gwnrt/meshing/mesh_quality.h"

@@ -1,6 +1,6 @@
 // Distances by brute force in double: every triangle (or boundary segment) measured, no tree.
 // The primitives are gwnrt's closest_point_on_triangle and closest_point_on_segment, which
-// tests/test_distance.cpp checks against dense sampling; zero-area triangles are measured as
+// tests/field/test_distance.cpp checks against dense sampling; zero-area triangles are measured as
 // their three edges, where closest_point_on_triangle is shown to be unreliable.
 #pragma once
 

@@ -3,7 +3,7 @@
 // ±1 across a triangle, so the bisection converges either to a smooth crossing of the level or
 // to a triangle whose jump straddles it; both lie on S = ∂{w > level}. In solid-angle mode w is
 // lifted continuously across the ±1 jumps first, so only smooth crossings of φ = w mod 1 count.
-// The reference for gwnrt's tracer on meshes with holes (tests/test_trace.cpp, the plugin tests).
+// The reference for gwnrt's tracer on meshes with holes (tests/trace/test_surface_trace_open.cpp, the plugin tests).
 #pragma once
 
 #include <algorithm>

@@ -39,7 +39,7 @@ check_sanitize() {
   # line tables are all ASan's and UBSan's reports need.
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
     -DGWNRT_SANITIZE=address,undefined -DGWNRT_WITH_CUDA=OFF -DGWNRT_WITH_PYTHON=OFF -DGWNRT_WERROR=ON
-  # The tests and every program they run (test_fuzz_inputs.cpp runs them all on hostile input).
+  # The tests and every program they run (tests/apps/test_fuzz_inputs.cpp runs them all on hostile input).
   cmake --build build-asan --parallel "$jobs" --target gwnrt_tests gwnrt_thread_tests gwnrt_embree_tests \
     gwnrt_render_tests gwnrt-query gwnrt-render gwnrt-sdf-study gwnrt-mesh gwnrt-trace gwnrt-bench-trace \
     gwnrt-bench-query gwnrt-bench-mesh gwnrt-consistency gwnrt-library-example gwnrt-engine-example \
@@ -61,7 +61,7 @@ check_tsan() {
   # caller's stack, whose slot the caller reuses after the join TSan cannot see; with the default
   # history the worker's stack was lost ("failed to restore the stack", 1 run in 2 of
   # gwnrt_thread_tests) and the suppression, which needs its TBB frames, could not match.
-  local options="suppressions=$PWD/tests/embree/tsan.supp halt_on_error=1 history_size=7"
+  local options="suppressions=$PWD/tests/plugin/tsan.supp halt_on_error=1 history_size=7"
   TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_thread_tests
   TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_embree_tests
 }
@@ -101,9 +101,9 @@ print('check downstream: installed gwnrt package:', m, 'w =', m.winding_number([
 }
 
 check_configs() {
-  # Only test_trace.cpp and bench_trace.cpp compile differently without Embree (GWNRT_HAVE_EMBREE:
-  # the tracer against Embree's own triangle test); the rest is the Release build's code. The
-  # configuration itself checks the CMake logic.
+  # Only tests/trace/test_surface_trace.cpp and bench_trace.cpp compile differently without Embree
+  # (GWNRT_HAVE_EMBREE: the tracer against Embree's own triangle test); the rest is the Release
+  # build's code. The configuration itself checks the CMake logic.
   cmake -S . -B build-noembree -G Ninja -DGWNRT_WITH_EMBREE=OFF -DGWNRT_WITH_CUDA=OFF -DGWNRT_WERROR=ON
   cmake --build build-noembree --parallel "$jobs" --target gwnrt_tests gwnrt-bench-trace
   ctest --test-dir build-noembree --output-on-failure --parallel "$jobs" -R '^TraceWatertight'

@@ -76,7 +76,7 @@ step cuda-tests-rest build-gpu/tests/gwnrt_cuda_tests \
   --gtest_filter="-*CudaBackend.*:*CudaQueries.*:*CudaTrace.*:*CudaMeshing.*:*CudaMeshingErrors.*" \
   --gtest_output="json:$out/cuda-tests-rest.json"
 # Every quantity on the bundled meshes, with gwnrt-render's first hit at 1920x1080 (its frames/s:
-# the issue's target is >= 60 on bunny_holes; gwnrt-render itself needs Embree and OpenImageIO).
+# the target is >= 60 on bunny_holes; gwnrt-render itself needs Embree and OpenImageIO).
 step consistency "$bin/gwnrt-consistency" --json "$out/consistency.json"
 
 dragon=""
@@ -90,7 +90,7 @@ if [ -f "$deps/meshes/dragon_vrip.ply.gz" ]; then
 fi
 
 # Query throughput, 1M points: the CPU's run, then the GPU's with it as the baseline (its ratio
-# column is GPU over CPU). The issue's targets: Taylor order-2 w >= 2e8/s and crossing w >= 5e8/s
+# column is GPU over CPU). The targets: Taylor order-2 w >= 2e8/s and crossing w >= 5e8/s
 # on the 871k dragon.
 for mesh in data/bunny_holes.obj $dragon; do
   name="$(basename "$mesh" .ply)"

@@ -1,5 +1,5 @@
-// Small valid mesh files as text, for the tests that read meshes (test_mesh_io.cpp) and for
-// the generated hostile inputs made from them (test_fuzz_inputs.cpp): the small reference mesh as
+// Small valid mesh files as text, for the tests that read meshes (io/) and for the
+// generated hostile inputs made from them (io/mesh_mutations.h): the small reference mesh as
 // OBJ with every statement a reader must tolerate, and as PLY in every encoding with distractions;
 // and the temporary directory those tests write them to.
 #pragma once
@@ -187,7 +187,7 @@ class TempDirTest : public ::testing::Test {
   std::string write(const std::string& name, std::string_view bytes) const {
     const std::filesystem::path p = dir_ / name;
     // Replacing rather than truncating: ext4 flushes a truncated-and-rewritten file to disk
-    // on close, which made the many rewrites of test_mesh_io.cpp take seconds.
+    // on close, which made the many rewrites of the reader tests (io/) take seconds.
     std::error_code ec;
     std::filesystem::remove(p, ec);
     std::ofstream f(p, std::ios::binary);

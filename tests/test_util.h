@@ -115,7 +115,7 @@ inline Mesh make_sphere(int levels, float radius = 1.0f) {
 
 // The upper half (z >= 0) of the unit sphere, outward normals: a fan around the pole (0,0,1) and
 // `rings` - 1 bands of quads down to the rim, a regular `segments`-gon at exactly z = 0 (so the
-// mirror image of the cap closes it: test_signed_distance.cpp's HemisphereReference). All vertices lie on the sphere.
+// mirror image of the cap closes it: sdf/sdf_fixtures.h's HemisphereReference). All vertices lie on the sphere.
 inline Mesh make_hemisphere(int rings, int segments) {
   Mesh m;
   m.positions.push_back({0.0f, 0.0f, 1.0f});

@@ -195,7 +195,7 @@ class Comparison {
     if (Status s = timed(t.cpu, [&] { return a_.mesh(options, ma, sa); }); !s.ok()) return named("meshing", s);
     if (Status s = timed(t.gpu, [&] { return b_.mesh(options, mb, sb); }); !s.ok()) return named("meshing", s);
     // Vertices to 2e-3 of a cell: rounding alone (the CPU code with and without fused multiply-
-    // adds) moved the worst by up to 4e-4 cells and a few percent by more than the 1e-5
+    // adds) moved the worst by up to 4e-4 cells and a few percent by more than 1e-5
     // (tests/cuda/test_cuda_meshing.cpp); the max and mean columns say how close they came.
     std::vector<Row> rows = {{mesh_, "mesh vertex count", "vertices", 0.0},
                              {mesh_, "mesh triangle count", "triangles", 0.0},

@@ -6,8 +6,8 @@
 #include <limits>
 #include <string>
 
-#include "../test_util.h"
 #include "gwnrt/cuda.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
@@ -140,7 +140,7 @@ TEST_P(CudaQueries, ColumnsHoldTheDevicesPointResults) {
 
 INSTANTIATE_TEST_SUITE_P(Meshes, CudaQueries, ::testing::Values("bunny.obj", "bunny_holes.obj", "teapot.obj"));
 
-// The scratch a DeviceModel keeps between batches (issue 17 item 1): batches that grow, shrink
+// The scratch a DeviceModel keeps between batches: batches that grow, shrink
 // and grow again past it give the CPU's w each time (a stale or short buffer would not).
 TEST(CudaBackend, BatchesReuseAndGrowTheScratch) {
   std::string why;

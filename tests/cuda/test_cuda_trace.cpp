@@ -8,9 +8,9 @@
 #include <cmath>
 #include <string>
 
-#include "../test_util.h"
 #include "gwnrt/cuda.h"
 #include "render/camera.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

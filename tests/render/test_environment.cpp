@@ -674,10 +674,10 @@ TEST_F(EnvironmentLoad, FailuresNameThePath) {
   std::printf("  garbage file: %s\n", g.message().c_str());
 }
 
-// Issue 15, item 13: an image's pixels times its scale beyond float (a radiance of 1e39 read
+// An image's pixels times its scale beyond float (a radiance of 1e39 read
 // as inf, then zeroed as non-finite) or beyond what a pixel's sum of samples carries
 // (kMaxRadiance) are refused, naming the file; at the limit the image loads unchanged.
-TEST_F(EnvironmentLoad, Issue15Item13_RadianceBeyondTheLimitIsRefused) {
+TEST_F(EnvironmentLoad, RadianceBeyondTheLimitIsRefused) {
   const int w = 4, h = 2;
   std::vector<float> data(std::size_t(w) * h * 3, 0.5f);
   data[5] = 1e19f;  // one pixel's blue

@@ -1,15 +1,15 @@
-// First-hit rendering on the GPU against the CPU (issue 17 item 4): the same per-pixel function
+// First-hit rendering on the GPU against the CPU: the same per-pixel function
 // (first_hit_pixel) in a kernel, so hit/miss must agree on at least 99.9% of the pixels, and
 // where both hit, the kind. Skips without the CUDA backend or a usable GPU.
 #include <string>
 
 #include <gtest/gtest.h>
 
-#include "../test_util.h"
 #include "gwnrt/engine.h"
 #include "render/camera.h"
 #include "render/integrators/first_hit.h"
 #include "render/integrators/first_hit_cuda.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {

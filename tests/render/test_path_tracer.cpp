@@ -9,10 +9,10 @@
 #include <OpenImageIO/imageio.h>
 #include <tbb/global_control.h>
 
-#include "../test_util.h"
 #include "render/integrators/path.h"
 #include "render/render_scene.h"
 #include "render/scene.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {

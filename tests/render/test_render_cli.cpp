@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "../cli_util.h"
-#include "../mesh_files.h"
-#include "../test_util.h"
+#include "cli_util.h"
 #include "gwnrt/base/memory.h"
+#include "mesh_files.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
@@ -69,7 +69,7 @@ TEST_F(RenderCli, FirstHitIntegratorRenders) {
                ".png", 24, 16);
 }
 
-// Issue 17 item 4: --frames renders N times and prints the rate; --device cuda renders on the GPU
+// --frames renders N times and prints the rate; --device cuda renders on the GPU
 // or fails saying why; --frames 0 is refused.
 TEST_F(RenderCli, FirstHitFramesAndDevice) {
   const std::string base = test::quote(test::data_path("bunny_holes.obj")) +
@@ -111,7 +111,7 @@ TEST_F(RenderCli, BadInputIsRefusedWithAMessage) {
   std::remove(bad.c_str());
 }
 
-// Issue 15 item 15: --spp 0, --max-depth 0 and a negative --seed are refused (they used to mean
+// --spp 0, --max-depth 0 and a negative --seed are refused (they used to mean
 // "the scene's value", like leaving the option out, while --spp -1 was refused).
 TEST_F(RenderCli, ZeroOrNegativeCountsAreRefused) {
   // And, as in a scene file, counts past their range (2^20 samples per pixel ran for days).
@@ -127,7 +127,7 @@ TEST_F(RenderCli, ZeroOrNegativeCountsAreRefused) {
 }
 
 TEST_F(RenderCli, FirstHitOptionsAreRefusedForThePathTracer) {
-  // Issue 15: `--level 1e39` and `--eps 0` exited 0 with the path tracer, which ignored them.
+  // `--level 1e39` and `--eps 0` exited 0 with the path tracer, which ignored them.
   // Values the first hit would take are refused as its options; values it would not (those two)
   // are refused by their flags' checks first, for either integrator (LimitsCli in
   // test_fuzz_inputs.cpp).
@@ -160,9 +160,9 @@ void expect_refusal(const std::string& binary, const std::string& args, const st
   EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
 }
 
-// Issue 15, item 1: scenes whose rays used to abort inside Embree (its ray.valid() assertion)
+// Scenes whose rays used to abort inside Embree (its ray.valid() assertion)
 // end in a message naming the JSON location (scene_checks covers each class in-process).
-TEST_F(RenderCli, Issue15Item1_DegenerateScenesExitWithAMessage) {
+TEST_F(RenderCli, DegenerateScenesExitWithAMessage) {
   const std::string bunny = test::data_path("bunny_holes.obj");
   const std::string out = " -o " + test::quote(test::temp_path("degenerate.png"));
   for (const auto& [scene, where] : {
@@ -188,9 +188,9 @@ TEST_F(RenderCli, Issue15Item1_DegenerateScenesExitWithAMessage) {
   std::remove(tiny.c_str());
 }
 
-// Issue 15, item 2: a number beyond double's range and a scene path that is a directory used to
+// A number beyond double's range and a scene path that is a directory used to
 // throw through main (std::terminate); now errors naming the file (and the line).
-TEST_F(RenderCli, Issue15Item2_UnreadableScenesExitWithAMessage) {
+TEST_F(RenderCli, UnreadableScenesExitWithAMessage) {
   const std::string out = " -o " + test::quote(test::temp_path("unreadable.png"));
   const std::string big = write_temp("big.json", "{\n  \"camera\": {\"fov\": 1e400}\n}\n");
   expect_refusal(binary_, test::quote(big) + out, big + ": not valid JSON: at line 2");
@@ -201,9 +201,9 @@ TEST_F(RenderCli, Issue15Item2_UnreadableScenesExitWithAMessage) {
   std::filesystem::remove(dir);
 }
 
-// Issue 15, item 12: sections of the wrong type and unknown keys used to be ignored (defaults
+// Sections of the wrong type and unknown keys used to be ignored (defaults
 // rendered); now refused, naming the location.
-TEST_F(RenderCli, Issue15Item12_WrongSectionsAndUnknownKeysAreRefused) {
+TEST_F(RenderCli, WrongSectionsAndUnknownKeysAreRefused) {
   const std::string out = " -o " + test::quote(test::temp_path("sections.png"));
   for (const auto& [scene, where] :
        {std::pair{R"({"camera": 5})", "/camera: expected an object"},
@@ -217,7 +217,7 @@ TEST_F(RenderCli, Issue15Item12_WrongSectionsAndUnknownKeysAreRefused) {
   }
 }
 
-// Finding F9: a key given twice and a scene without geometry used to render (exit 0), the one
+// A key given twice and a scene without geometry used to render (exit 0), the one
 // with a value silently dropped, the other an empty sky; a GWN object whose level w never reaches
 // rendered nothing of it without a word. Now two refusals naming the location, and a warning.
 TEST_F(RenderCli, DuplicateKeysEmptyScenesAndUnreachableLevels) {
@@ -243,10 +243,10 @@ TEST_F(RenderCli, DuplicateKeysEmptyScenesAndUnreachableLevels) {
   std::remove(path.c_str());
 }
 
-// Issue 15, item 13: an emission above 1.8e19 used to render black in PNG (the tone curve's
+// An emission above 1.8e19 used to render black in PNG (the tone curve's
 // v² overflowed to inf / inf), and 3e38 also overflowed the pixel's sum of samples. Now the
 // largest radiance allowed (1e20) renders white, and 3e38 is refused.
-TEST_F(RenderCli, Issue15Item13_BrightestEmissionRendersWhite) {
+TEST_F(RenderCli, BrightestEmissionRendersWhite) {
   // The camera looks straight down at an emissive plane that fills the view.
   const std::string scene = R"({"camera": {"eye": [0, 1, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov": 30},
       "materials": {"lamp": {"type": "emissive", "emission": [EMISSION]}}, "meshes": [{"plane": 10, "material": "lamp"}]})";
@@ -273,9 +273,9 @@ TEST_F(RenderCli, Issue15Item13_BrightestEmissionRendersWhite) {
   std::remove(over.c_str());
 }
 
-// Issue 15, item 3: a 32768 x 32768 image used to end in std::bad_alloc (or the OOM killer) after
+// A 32768 x 32768 image used to end in std::bad_alloc (or the OOM killer) after
 // the scene was built; now refused before anything is allocated, saying what it would need.
-TEST_F(RenderCli, Issue15Item3_ImageBeyondMemoryIsRefusedUpFront) {
+TEST_F(RenderCli, ImageBeyondMemoryIsRefusedUpFront) {
   // Per pixel: with AOVs to EXR, 10 float channels and their encoding, 80 bytes (80 GiB); for
   // first-hit, RGB (12), the per-pixel trace (16), its PNG (3 + 3), the 7-channel statistics
   // image (28) and its EXR encoding (28): 90. Machines with that much free memory would render
@@ -300,9 +300,9 @@ TEST_F(RenderCli, Issue15Item3_ImageBeyondMemoryIsRefusedUpFront) {
   }
 }
 
-// Issue 15, item 14: a write that fails (a full disk) used to print "wrote" and exit 0; an
+// A write that fails (a full disk) used to print "wrote" and exit 0; an
 // output that cannot be created (/proc/x.png) was found only after the render.
-TEST_F(RenderCli, Issue15Item14_FailedWritesExitNonZero) {
+TEST_F(RenderCli, FailedWritesExitNonZero) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
   const std::string bunny = test::quote(test::data_path("bunny_holes.obj"));
   const std::string png = test::temp_path("full.png"), exr = test::temp_path("full.exr");
@@ -351,10 +351,10 @@ TEST_F(RenderCli, Issue15Item14_FailedWritesExitNonZero) {
   std::remove(bad_scene.c_str());
 }
 
-// Issue 15, item 11 (gwnrt-render's part): what the mesh loader skipped (an OBJ line with an
+// What the mesh loader skipped (an OBJ line with an
 // unknown statement) is said, as gwnrt-mesh says it, for meshes read by scene files, the default
 // scene and the first-hit integrator.
-TEST_F(RenderCli, Issue15Item11_MeshLoadWarningsArePrinted) {
+TEST_F(RenderCli, MeshLoadWarningsArePrinted) {
   const std::string mesh = write_temp("odd.obj",
                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvv 1 1 1\n"
                                       "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");

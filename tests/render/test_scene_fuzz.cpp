@@ -1,4 +1,4 @@
-// Generated hostile scene files (issue 15: "every hostile input gets a clear error or a right
+// Generated hostile scene files ("every hostile input gets a clear error or a right
 // answer"). From valid scenes (the bundled data/*.json and a small one that uses every key), a
 // fixed generator makes a few thousand mutations: every node replaced by values of every wrong
 // type, by huge, tiny, denormal and out-of-range numbers and by degenerate vectors and matrices;
@@ -21,11 +21,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "../cli_util.h"
-#include "../test_util.h"
+#include "cli_util.h"
 #include "render/integrators/path.h"
 #include "render/render_scene.h"
 #include "render/scene.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {

@@ -1,4 +1,4 @@
-// Issue 16 item 2: a model built with BuildOptions::defer_parts builds M's tree at once and its
+// A model built with BuildOptions::defer_parts builds M's tree at once and its
 // boundary, cone and sheets on first need, once, whatever the number of threads that need them
 // at the same moment. Checked against a model built whole (the same mesh, the same options but
 // the deferral): every field and every ray must come out bit for bit the same, since the parts
@@ -13,8 +13,8 @@
 #include <thread>
 #include <vector>
 
-#include "../test_util.h"
 #include "gwnrt/query/batch.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {

@@ -31,7 +31,7 @@ GWNRT_HD inline float pseudo_distance(float w, const vec3& gradient, float level
 // opposite convention, d₁ changes sign and so would the correction's sign relative to d₁.)
 // The root form never changes the sign of d₁ and stays within 2|d₁|; where the quadratic has no
 // root (1 + 2κd₁ < 0) the line's closest approach in the model, t = 2d₁, is taken.
-// Checked where the answer is known: the open hemisphere's disk, tests/test_signed_distance.cpp.
+// Checked where the answer is known: the open hemisphere's disk, tests/sdf/test_signed_distance.cpp.
 GWNRT_HD inline float curvature_corrected_distance(float w, const vec3& gradient, const sym3& hessian, float level) {
   const float d1 = pseudo_distance(w, gradient, level);
   if (d1 == 0.0f || !(fabsf(d1) < kInfinity)) return d1;

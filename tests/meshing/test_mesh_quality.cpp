@@ -1,0 +1,412 @@
+// The mesh quality report (gwnrt/meshing/mesh_quality.h): topology and self-intersections on
+// meshes whose answers are known by construction, and the distances to S where S is the mesh
+// itself.
+#include "gwnrt/meshing/mesh_quality.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gwnrt/geometry/exact_predicates.h"
+#include "test_util.h"
+
+namespace gwnrt {
+namespace {
+
+SurfaceMesh to_surface(const Mesh& m) {
+  SurfaceMesh s;
+  s.positions = m.positions;
+  s.triangles = m.triangles;
+  return s;
+}
+
+// The unit corner tetrahedron, outward.
+SurfaceMesh tetrahedron() {
+  SurfaceMesh s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  s.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return s;
+}
+
+// Three own vertices per triangle.
+SurfaceMesh to_soup(const SurfaceMesh& m) {
+  SurfaceMesh s;
+  for (const uvec3& t : m.triangles) {
+    const uint32_t base = uint32_t(s.positions.size());
+    for (int k = 0; k < 3; ++k) s.positions.push_back(m.positions[t[k]]);
+    s.triangles.push_back({base, base + 1, base + 2});
+  }
+  return s;
+}
+
+MeshTopology topology(const SurfaceMesh& m, bool weld = false) {
+  MeshTopology t;
+  const Status s = mesh_topology(m, t, weld);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return t;
+}
+
+uint64_t intersections(const SurfaceMesh& m, std::vector<glm::uvec2>* pairs = nullptr) {
+  uint64_t n = ~uint64_t(0);
+  const Status s = count_self_intersections(m, n, pairs);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return n;
+}
+
+// Two triangles as a mesh of their own.
+SurfaceMesh pair_mesh(const exact::Triangle& p, const exact::Triangle& q) {
+  SurfaceMesh s;
+  s.positions = {p[0], p[1], p[2], q[0], q[1], q[2]};
+  s.triangles = {{0, 1, 2}, {3, 4, 5}};
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Topology
+
+TEST(MeshQualityTopology, ClosedMeshesAreClosedManifolds) {
+  const SurfaceMesh meshes[] = {tetrahedron(), to_surface(test::make_cube()), to_surface(test::make_sphere(3))};
+  for (const SurfaceMesh& m : meshes) {
+    const MeshTopology t = topology(m);
+    EXPECT_TRUE(t.closed_manifold());
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.vertices, m.positions.size());
+    EXPECT_EQ(t.triangles, m.triangles.size());
+    EXPECT_EQ(t.unreferenced_vertices, 0u);
+    EXPECT_EQ(intersections(m), 0u);
+  }
+}
+
+TEST(MeshQualityTopology, RemovedTriangleLeavesThreeBoundaryEdges) {
+  SurfaceMesh cube = to_surface(test::make_cube());
+  cube.triangles.pop_back();
+  const MeshTopology t = topology(cube);
+  EXPECT_EQ(t.boundary_edges, 3u);
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.non_manifold_vertices, 0u);
+  EXPECT_EQ(t.inconsistent_edges, 0u);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_FALSE(t.closed_manifold());
+}
+
+TEST(MeshQualityTopology, FlippedTriangleHasThreeInconsistentEdges) {
+  SurfaceMesh cube = to_surface(test::make_cube());
+  std::swap(cube.triangles[4][1], cube.triangles[4][2]);
+  const MeshTopology t = topology(cube);
+  EXPECT_EQ(t.inconsistent_edges, 3u);
+  EXPECT_EQ(t.boundary_edges, 0u);
+  EXPECT_FALSE(t.closed_manifold());
+  EXPECT_EQ(intersections(cube), 0u);  // orientation is no intersection
+}
+
+TEST(MeshQualityTopology, CubesSharingOneVertexMakeItNonManifold) {
+  // A second cube moved by (2, 2, 2): its corner (-1, -1, -1) lands on the first's (1, 1, 1),
+  // vertex 6, and is given that index.
+  const Mesh a = test::make_cube();
+  SurfaceMesh m = to_surface(a);
+  for (size_t i = 1; i < a.positions.size(); ++i) m.positions.push_back(a.positions[i] + vec3(2.0f));
+  auto remap = [](uint32_t v) { return v == 0 ? 6u : v + 7u; };
+  for (const uvec3& t : a.triangles) m.triangles.push_back({remap(t[0]), remap(t[1]), remap(t[2])});
+  const MeshTopology t = topology(m);
+  EXPECT_EQ(t.non_manifold_vertices, 1u);
+  EXPECT_EQ(t.components, 2u);
+  EXPECT_EQ(t.boundary_edges, 0u);
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.vertices, 15u);
+  EXPECT_FALSE(t.closed_manifold());
+  EXPECT_EQ(intersections(m), 0u);  // touching in the shared vertex only
+  // Welded, the same vertex from two indices: the same topology.
+  SurfaceMesh split = m;
+  split.positions.push_back(split.positions[6]);
+  for (size_t k = 12; k < split.triangles.size(); ++k)
+    for (int c = 0; c < 3; ++c)
+      if (split.triangles[k][c] == 6) split.triangles[k][c] = 15;
+  EXPECT_EQ(topology(split).non_manifold_vertices, 0u);
+  EXPECT_EQ(topology(split, true), t);
+}
+
+TEST(MeshQualityTopology, ThreeTrianglesOnOneEdge) {
+  SurfaceMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5f, 1, 0}, {0.5f, -1, 0}, {0.5f, 0, 1}};
+  m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  const MeshTopology t = topology(m);
+  EXPECT_EQ(t.non_manifold_edges, 1u);
+  EXPECT_EQ(t.boundary_edges, 6u);
+  EXPECT_EQ(t.non_manifold_vertices, 0u);  // around each end the three are one fan
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(intersections(m), 0u);
+}
+
+TEST(MeshQualityTopology, WeldedSoupEqualsIndexedMesh) {
+  const SurfaceMesh shapes[] = {to_surface(test::make_cube()), to_surface(test::make_sphere(2))};
+  for (const SurfaceMesh& cube : shapes) {
+    const SurfaceMesh soup = to_soup(cube);
+    EXPECT_EQ(topology(soup, true), topology(cube));
+    const MeshTopology raw = topology(soup);
+    EXPECT_EQ(raw.components, cube.triangles.size());
+    EXPECT_EQ(raw.boundary_edges, 3 * cube.triangles.size());
+    EXPECT_EQ(intersections(soup), 0u);  // sharing is by position
+  }
+  // -0.0 and 0.0 are one position.
+  SurfaceMesh t = tetrahedron();
+  SurfaceMesh soup = to_soup(t);
+  for (vec3& p : soup.positions)
+    if (p == vec3(0.0f)) {
+      p = vec3(-0.0f, 0.0f, -0.0f);
+      break;
+    }
+  EXPECT_EQ(topology(soup, true), topology(t));
+}
+
+TEST(MeshQualityTopology, DegenerateTrianglesAreCounted) {
+  SurfaceMesh m = tetrahedron();
+  m.positions.push_back({2, 0, 0});
+  m.positions.push_back({7, 7, 7});  // unreferenced
+  m.triangles.push_back({0, 1, 4});  // collinear: zero area, in the edge counts
+  m.triangles.push_back({2, 2, 3});  // repeated index: left out
+  const MeshTopology t = topology(m);
+  EXPECT_EQ(t.degenerate_triangles, 2u);
+  EXPECT_EQ(t.unreferenced_vertices, 1u);
+  EXPECT_EQ(t.non_manifold_edges, 1u);  // (0, 1) now has three triangles
+  EXPECT_EQ(t.boundary_edges, 2u);      // (1, 4) and (4, 0)
+  EXPECT_FALSE(t.closed_manifold());
+  EXPECT_EQ(intersections(m), 0u);  // zero-area triangles are left out
+}
+
+TEST(MeshQualityTopology, EmptyAndBadInput) {
+  const SurfaceMesh empty;
+  EXPECT_EQ(topology(empty), MeshTopology{});
+  EXPECT_EQ(intersections(empty), 0u);
+
+  SurfaceMesh bad = tetrahedron();
+  bad.triangles[1][2] = 17;
+  MeshTopology t;
+  uint64_t n = 0;
+  for (const Status& s : {mesh_topology(bad, t), count_self_intersections(bad, n)}) {
+    EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+    EXPECT_NE(s.message().find("triangle 1 refers to vertex 17"), std::string::npos) << s.message();
+  }
+  SurfaceMesh nan = tetrahedron();
+  nan.positions[2].y = std::nanf("");
+  const Status s = mesh_topology(nan, t, true);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidMesh);
+  EXPECT_NE(s.message().find("vertex 2"), std::string::npos) << s.message();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Self-intersections
+
+TEST(MeshQualitySelfIntersection, AnalyticPairs) {
+  const exact::Triangle base = {vec3(0, 0, 0), vec3(2, 0, 0), vec3(0, 2, 0)};
+  struct Case {
+    const char* name;
+    exact::Triangle q;
+    bool meet;
+  };
+  const Case cases[] = {
+      {"crossing", {vec3(0.5f, 0.5f, -1), vec3(0.5f, 0.5f, 1), vec3(1.5f, 0.2f, 0)}, true},
+      {"above", {vec3(0.5f, 0.5f, 1), vec3(1.5f, 0.5f, 1), vec3(0.5f, 1.5f, 2)}, false},
+      {"vertex on the face", {vec3(0.5f, 0.5f, 0), vec3(1, 1, 1), vec3(0, 1, 1)}, true},
+      {"vertex on an edge (T-junction)", {vec3(1, 0, 0), vec3(1, -1, 1), vec3(1, 1, 1)}, true},
+      {"coplanar, inside", {vec3(0.2f, 0.2f, 0), vec3(0.6f, 0.2f, 0), vec3(0.2f, 0.6f, 0)}, true},
+      {"coplanar, apart", {vec3(2, 2, 0), vec3(3, 2, 0), vec3(2, 3, 0)}, false},
+      {"folded onto the shared edge", {vec3(2, 0, 0), vec3(0, 0, 0), vec3(1, 0.5f, 0)}, true},
+      {"unfolded at the shared edge", {vec3(2, 0, 0), vec3(0, 0, 0), vec3(1, -0.5f, 0)}, false},
+      {"dihedral at the shared edge", {vec3(2, 0, 0), vec3(0, 0, 0), vec3(1, 0.5f, 0.5f)}, false},
+      {"shared vertex, crossing", {vec3(0, 0, 0), vec3(0.25f, 0.25f, -1), vec3(0.25f, 0.25f, 1)}, true},
+      {"shared vertex, apart", {vec3(0, 0, 0), vec3(-1, 0, 1), vec3(0, -1, 1)}, false},
+      {"shared vertex, coplanar wedges apart", {vec3(0, 0, 0), vec3(-1, 0, 0), vec3(0, -1, 0)}, false},
+      {"shared vertex, coplanar wedges overlap", {vec3(0, 0, 0), vec3(1, 1, 0), vec3(-1, 1, 0)}, true},
+      {"shared vertex, touching along an edge line", {vec3(0, 0, 0), vec3(1, 0, 1), vec3(1, 0, -1)}, true},
+      {"duplicate", {vec3(0, 2, 0), vec3(0, 0, 0), vec3(2, 0, 0)}, true},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(exact::triangles_intersect(base, c.q), c.meet) << c.name;
+    EXPECT_EQ(exact::triangles_intersect(c.q, base), c.meet) << c.name;
+    std::vector<glm::uvec2> pairs;
+    EXPECT_EQ(intersections(pair_mesh(base, c.q), &pairs), c.meet ? 1u : 0u) << c.name;
+    if (c.meet) {
+      ASSERT_EQ(pairs.size(), 1u);
+      EXPECT_EQ(pairs[0], glm::uvec2(0, 1));
+    }
+  }
+}
+
+TEST(MeshQualitySelfIntersection, ClosedMeshesAndDefects) {
+  // A fine icosphere and a cube's soup: nothing but shared vertices and edges.
+  EXPECT_EQ(intersections(to_surface(test::make_sphere(5))), 0u);
+  // The sphere and a copy moved by half its radius cross along a circle.
+  const Mesh a = test::make_sphere(3);
+  SurfaceMesh two = to_surface(a);
+  const uint32_t offset = uint32_t(two.positions.size());
+  for (const vec3& p : a.positions) two.positions.push_back(p + vec3(0.5f, 0.01f, 0.02f));
+  for (const uvec3& t : a.triangles) two.triangles.push_back(t + uvec3(offset));
+  std::vector<glm::uvec2> pairs;
+  const uint64_t n = intersections(two, &pairs);
+  EXPECT_GT(n, 20u);
+  ASSERT_EQ(pairs.size(), n);
+  for (const glm::uvec2& p : pairs) {
+    EXPECT_LT(p.x, a.triangles.size());  // every pair has one triangle of each sphere
+    EXPECT_GE(p.y, a.triangles.size());
+  }
+  // A vertex pushed through the opposite side of the cube.
+  SurfaceMesh dent = to_surface(test::make_cube());
+  dent.positions[6] = {-0.5f, -0.5f, -1.5f};
+  EXPECT_GT(intersections(dent), 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distances
+
+struct SphereFixture {
+  static constexpr float kRadius = 1.0f;
+  Mesh mesh = test::make_sphere(4, kRadius);
+  GwnModel model = test::build_model(mesh);
+};
+
+SurfaceDistances distances(const GwnModel& model, const SurfaceMesh& m, uint32_t samples = 20000,
+                           uint32_t rays = 4000) {
+  SurfaceDistanceOptions o;
+  o.output_samples = samples;
+  o.surface_rays = rays;
+  SurfaceDistances d;
+  const Status s = surface_distances(model, m, o, d);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return d;
+}
+
+// The largest angle between a face's normal and its vertices' normals (radial, on the sphere):
+// how far interpolated normals can lean from the faceted S.
+double faceting_angle_deg(const Mesh& m) {
+  double worst = 0;
+  for (const uvec3& t : m.triangles) {
+    const dvec3 p0(m.positions[t[0]]), p1(m.positions[t[1]]), p2(m.positions[t[2]]);
+    const dvec3 n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    for (const dvec3& p : {p0, p1, p2})
+      worst = std::max(worst, std::acos(std::min(1.0, glm::dot(n, glm::normalize(p)))) * 180.0 / kPi);
+  }
+  return worst;
+}
+
+TEST(MeshQualityDistances, SameMeshIsAtZeroDistance) {
+  const SphereFixture f;
+  const SurfaceMesh out = to_surface(f.mesh);
+  const SurfaceDistances d = distances(f.model, out);
+  EXPECT_EQ(d.output_samples, 20000u + f.mesh.positions.size());
+  EXPECT_GT(d.surface_points, 4000u);  // about two hits a ray (entering and leaving)
+  const double tol = 1e-5 * SphereFixture::kRadius;
+  EXPECT_LT(d.hausdorff_to_surface, tol);
+  EXPECT_LT(d.hausdorff_from_surface, tol);
+  EXPECT_LT(d.chamfer, tol);
+  EXPECT_LE(d.mean_to_surface, d.hausdorff_to_surface);
+  // Face normals against the sheet hits' face normals: float round-off.
+  EXPECT_LT(d.normal_deviation_max_deg, 1e-3);
+  EXPECT_LT(d.normal_deviation_mean_deg, 1e-4);
+
+  // With radial vertex normals the interpolated normal leans from the faces by at most the
+  // faceting angle.
+  SurfaceMesh smooth = out;
+  for (const vec3& p : out.positions) smooth.normals.push_back(glm::normalize(p));
+  const SurfaceDistances ds = distances(f.model, smooth);
+  EXPECT_LT(ds.hausdorff_from_surface, tol);
+  EXPECT_GT(ds.normal_deviation_max_deg, 0.1);
+  EXPECT_LE(ds.normal_deviation_max_deg, faceting_angle_deg(f.mesh) + 1e-3);
+
+  // Inside out: the normals are opposite.
+  SurfaceMesh flipped = out;
+  for (uvec3& t : flipped.triangles) std::swap(t[1], t[2]);
+  const SurfaceDistances df = distances(f.model, flipped, 1000, 1000);
+  EXPECT_GT(df.normal_deviation_mean_deg, 179.99);
+}
+
+TEST(MeshQualityDistances, ScaledMeshIsAtOnePercent) {
+  // The output is S scaled by 1.01 about the centre. S is convex with its vertices on the sphere
+  // of radius r; each face F lies in a plane at distance h_F <= r from the centre.
+  //  - A point p of the output is outside S and p / 1.01 is in S, so dist(p, S) <= 0.01|p| / 1.01
+  //    <= 0.01 r; it is beyond F's plane by at least 0.01 h_F, so dist >= 0.01 min h_F. At the
+  //    scaled vertices (samples too) the nearest point of S is the vertex: exactly 0.01 r.
+  //  - A point q of S is inside the output; its distance to a scaled face's plane is
+  //    1.01 h_F − n_F·q >= 0.01 h_F, and to its own face's, 0.01 h_F <= 0.01 r.
+  // So both Hausdorff distances and both means lie in [0.01 min h_F, 0.01 r], min h_F = r cos of
+  // the faces' angular radius (0.9985 r at 4 subdivisions), and to S the maximum is 0.01 r.
+  const SphereFixture f;
+  SurfaceMesh out = to_surface(f.mesh);
+  for (vec3& p : out.positions) p *= 1.01f;
+  double h_min = SphereFixture::kRadius;
+  for (const uvec3& t : f.mesh.triangles) {
+    const dvec3 p0(f.mesh.positions[t[0]]), p1(f.mesh.positions[t[1]]), p2(f.mesh.positions[t[2]]);
+    h_min = std::min(h_min, glm::dot(glm::normalize(glm::cross(p1 - p0, p2 - p0)), p0));
+  }
+  const double lo = 0.01 * h_min - 1e-6, hi = 0.01 * SphereFixture::kRadius + 1e-6;  // + float round-off
+  const SurfaceDistances d = distances(f.model, out);
+  for (const double v :
+       {d.hausdorff_to_surface, d.hausdorff_from_surface, d.mean_to_surface, d.mean_from_surface, d.chamfer}) {
+    EXPECT_GE(v, lo);
+    EXPECT_LE(v, hi);
+  }
+  EXPECT_NEAR(d.hausdorff_to_surface, 0.01 * SphereFixture::kRadius, 1e-6);
+}
+
+TEST(MeshQualityDistances, RefusesModelsWithoutMatchingSheetsAndBadInput) {
+  const SphereFixture f;
+  const SurfaceMesh out = to_surface(f.mesh);
+  SurfaceDistanceOptions o;
+  o.output_samples = 100;
+  o.surface_rays = 100;
+  SurfaceDistances d;
+  o.level = 0.25f;  // the model's sheets are for 0.5
+  EXPECT_EQ(surface_distances(f.model, out, o, d).code(), StatusCode::kInvalidArgument);
+  o.level = 0.5f;
+  GwnModel bare;
+  BuildOptions b;
+  b.classify_sheets = false;
+  ASSERT_TRUE(GwnModel::build(f.mesh, bare, b).ok());
+  const Status s = surface_distances(bare, out, o, d);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("sheets"), std::string::npos) << s.message();
+
+  SurfaceMesh bad = out;
+  bad.normals.resize(3);
+  EXPECT_EQ(surface_distances(f.model, bad, o, d).code(), StatusCode::kInvalidMesh);
+  bad = out;
+  bad.triangles[5][0] = uint32_t(bad.positions.size());
+  const Status si = surface_distances(f.model, bad, o, d);
+  EXPECT_NE(si.message().find("triangle 5"), std::string::npos) << si.message();
+
+  // An empty output: nothing to measure from it, and S is infinitely far from it.
+  ASSERT_TRUE(surface_distances(f.model, SurfaceMesh{}, o, d).ok());
+  EXPECT_EQ(d.output_samples, 0u);
+  EXPECT_EQ(d.hausdorff_to_surface, 0.0);
+  EXPECT_GT(d.surface_points, 0u);
+  EXPECT_TRUE(std::isinf(d.hausdorff_from_surface));
+}
+
+// Not a check: the time of the topology and the intersection count on a 1.3M-triangle sphere
+// (--gtest_also_run_disabled_tests to see it).
+TEST(MeshQualityTiming, DISABLED_MillionTriangles) {
+  const SurfaceMesh m = to_surface(test::make_sphere(8));
+  using clock = std::chrono::steady_clock;
+  auto t0 = clock::now();
+  const MeshTopology t = topology(m);
+  auto t1 = clock::now();
+  const MeshTopology tw = topology(m, true);
+  auto t2 = clock::now();
+  const uint64_t n = intersections(m);
+  auto t3 = clock::now();
+  auto sec = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+  std::printf("%zu triangles: mesh_topology %.3f s (welded %.3f s), count_self_intersections %.3f s\n",
+              m.triangles.size(), sec(t0, t1), sec(t1, t2), sec(t2, t3));
+  EXPECT_TRUE(t.closed_manifold());
+  EXPECT_EQ(tw, t);
+  EXPECT_EQ(n, 0u);
+}
+
+}  // namespace
+}  // namespace gwnrt
