@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
   // The mesher refuses a grid beyond its budget, saying what it would need; a budget beyond the
   // memory available would let the kernel kill the process instead, or on the GPU
   // fail an allocation half-way.
-  const uint64_t available = gwnrt::Engine().available_memory(where);
+  const uint64_t available = gwnrt::available_memory_on(where);
   const bool budget_is_available_memory = available < options.memory_budget;
   if (budget_is_available_memory) options.memory_budget = available;
   const gwnrt::apps::ThreadLimit thread_limit(threads);

@@ -30,7 +30,8 @@ class DeviceCopy {
 bool device_backend_built();
 bool device_usable(std::string* why);
 uint64_t device_free_memory();
-// The model's copy on the GPU (its parts built before). Fails without a usable GPU.
+// The model's copy on the GPU, its parts built first. Fails without a usable GPU (device_usable's
+// reason) before building any.
 Status upload_device_copy(const GwnModel& model, std::unique_ptr<DeviceCopy>& out);
 
 }  // namespace gwnrt::detail

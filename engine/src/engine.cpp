@@ -70,7 +70,6 @@ Status Engine::gpu_copy(const detail::DeviceCopy*& out) const {
   return guard_status("Engine::upload", [&] {
     std::lock_guard<std::mutex> lock(gpu_->mutex);
     if (!gpu_->copy) {
-      if (Status s = model_.prepare(kPartTriangles | kPartBoundary | kPartSheets); !s.ok()) return s;
       if (Status s = detail::upload_device_copy(model_, gpu_->copy); !s.ok()) return s;
     }
     out = gpu_->copy.get();
@@ -91,7 +90,7 @@ Status Engine::device_model(const cuda::DeviceModel*& out) const {
   return Status::Ok();
 }
 
-uint64_t Engine::available_memory(Device device) const {
+uint64_t available_memory_on(Device device) {
   DeviceChoice chosen;
   if (!choose_device(device, chosen).ok()) return 0;
   return chosen.device == Device::kCuda ? detail::device_free_memory() : available_memory_bytes();
@@ -99,9 +98,13 @@ uint64_t Engine::available_memory(Device device) const {
 
 Status Engine::on_device(Device device, const detail::DeviceCopy*& copy) const {
   copy = nullptr;
-  DeviceChoice chosen;
-  if (Status s = choose_device(device, chosen); !s.ok()) return s;
-  if (chosen.device == Device::kCpu) return Status::Ok();
+  if (device == Device::kCpu) return Status::Ok();
+  if (device == Device::kAuto) {
+    DeviceChoice chosen;
+    if (Status s = choose_device(device, chosen); !s.ok() || chosen.device == Device::kCpu) return s;
+  }
+  // kCuda: the upload refuses a missing GPU with choose_device's reason; once made, the copy is
+  // used without asking the driver again.
   return gpu_copy(copy);
 }
 

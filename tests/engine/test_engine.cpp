@@ -103,7 +103,7 @@ TEST(Engine, CpuBatchesAreTheDrivers) {
   ASSERT_EQ(mesh.triangles.size(), expected_mesh.triangles.size());
   EXPECT_EQ(std::memcmp(mesh.positions.data(), expected_mesh.positions.data(), mesh.positions.size() * sizeof(vec3)),
             0);
-  EXPECT_EQ(engine.available_memory(Device::kCpu) > 0, available_memory_bytes() > 0);
+  EXPECT_EQ(available_memory_on(Device::kCpu) > 0, available_memory_bytes() > 0);
 }
 
 // Without a usable GPU, `cuda` is refused with the reason and the results are left alone; `auto`
@@ -123,7 +123,7 @@ TEST(Engine, CudaWithoutAGpuSaysWhy) {
   const cuda::DeviceModel* device = reinterpret_cast<const cuda::DeviceModel*>(&engine);
   EXPECT_FALSE(engine.device_model(device).ok());
   EXPECT_EQ(device, nullptr);
-  EXPECT_EQ(engine.available_memory(Device::kCuda), 0u);
+  EXPECT_EQ(available_memory_on(Device::kCuda), 0u);
   SurfaceMesh mesh;
   EXPECT_EQ(engine.extract_surface(Device::kCuda, MeshingOptions{}, mesh).code(), StatusCode::kUnavailable);
 

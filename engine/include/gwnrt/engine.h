@@ -49,6 +49,10 @@ struct DeviceChoice {
 // when usable, else the CPU with the reason.
 Status choose_device(Device asked, DeviceChoice& out);
 
+// The memory a batch on `device` may use now: what the host has available (kCpu) or the GPU's
+// free memory (kCuda; 0 without one). kAuto is resolved as choose_device resolves it.
+uint64_t available_memory_on(Device device);
+
 // Where a GPU batch's time went, in seconds: inputs copied up, the kernel, results copied down.
 struct DeviceTimings {
   double upload = 0, kernel = 0, download = 0;
@@ -68,15 +72,12 @@ class Engine {
   // model's, not thread-safe with batches running on this engine.
   Status set_sheet_level(float level);
 
-  // The model on the GPU, with every part built first: uploaded once (concurrent callers wait
-  // for one upload), kept until destruction or set_sheet_level. Fails without a usable GPU.
+  // The model on the GPU, with every part built first (cuda::DeviceModel::upload builds them):
+  // uploaded once (concurrent callers wait for one upload), kept until destruction or
+  // set_sheet_level. Fails without a usable GPU, saying why, before any part is built.
   Status upload() const;
   // The GPU's copy for a caller's own kernels (gwnrt-render's first hit), uploaded as upload().
   Status device_model(const cuda::DeviceModel*& out) const;
-
-  // The memory a batch on `device` may use now: what the host has available (kCpu) or the GPU's
-  // free memory (kCuda; 0 without one). kAuto is resolved as choose_device resolves it.
-  uint64_t available_memory(Device device) const;
 
   // The batches, on `device` (kAuto resolved per call by choose_device). On the CPU they are
   // gwnrt::evaluate_points, evaluate_points_to_columns, trace_rays and extract_surface (query/,
@@ -96,7 +97,7 @@ class Engine {
  private:
   struct Gpu;  // the mutex and the device copy, made on first need
   Status gpu_copy(const detail::DeviceCopy*& out) const;
-  // `device` resolved by choose_device; for the GPU its copy (null for the CPU).
+  // `device` resolved (kAuto by choose_device); for the GPU its copy (null for the CPU).
   Status on_device(Device device, const detail::DeviceCopy*& copy) const;
 
   GwnModel model_;
