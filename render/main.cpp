@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::string stats_path;
 
-  app.add_option("input", mesh_path, "Scene file (.json) or triangle mesh (.obj or .ply)")->required();
+  app.add_option("input", mesh_path, "Scene file (.json) or triangle mesh (.obj, .ply or .stl)")->required();
   app.add_option("--integrator", integrator,
                  "path: path tracing on Embree (scene file or default scene); first-hit: one traced ray per "
                  "pixel on the mesh's S, shaded directly")

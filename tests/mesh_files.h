@@ -43,6 +43,38 @@ struct Small {
   std::vector<uvec3> triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {1, 5, 6}, {1, 6, 2}, {1, 2, 3}, {4, 3, 6}};
 };
 
+// The small reference mesh's triangles as an STL: ASCII (a facet per triangle, the shortest text
+// of each float) or binary (a header that begins "solid", as many exporters write).
+inline std::string small_stl(bool binary) {
+  const Small small;
+  std::string s;
+  if (!binary) {
+    s = "solid small\n";
+    for (const uvec3& t : small.triangles) {
+      s += " facet normal 0 0 0\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) {
+        const vec3& p = small.positions[t[k]];
+        s += "   vertex " + num(p.x) + " " + num(p.y) + " " + num(p.z) + "\n";
+      }
+      s += "  endloop\n endfacet\n";
+    }
+    return s + "endsolid small\n";
+  }
+  s = "solid small (binary)";
+  s.resize(80, ' ');
+  auto word = [&](uint32_t v) {
+    for (int k = 0; k < 4; ++k) s += char((v >> (8 * k)) & 0xff);
+  };
+  word(uint32_t(small.triangles.size()));
+  for (const uvec3& t : small.triangles) {
+    for (int k = 0; k < 3; ++k) word(0);
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) word(std::bit_cast<uint32_t>(small.positions[t[k]][a]));
+    s += std::string(2, '\0');
+  }
+  return s;
+}
+
 // Writes PLY bodies in any of the three encodings with any scalar type.
 class PlyBody {
  public:

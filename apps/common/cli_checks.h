@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "gwnrt/io/mesh_io.h"
 #include "gwnrt/trace/trace_types.h"
 
 namespace gwnrt::apps {
@@ -41,6 +42,15 @@ CLI::Validator number_check(Ok ok, const std::string& wanted, const std::string&
         return std::string();
       },
       name);
+}
+
+// --weld-tolerance, in every program that reads a mesh (MeshLoadOptions::weld_tolerance).
+inline void add_weld_tolerance_option(CLI::App& app, double& tolerance) {
+  app.add_option("--weld-tolerance", tolerance,
+                 "Also weld vertices closer than this fraction of the box's diagonal (files written with rounding; "
+                 "default 0: only bit-identical positions)")
+      ->check(number_check([](double v) { return v >= 0 && v <= kMaxWeldTolerance; }, "a number in [0, 0.01]",
+                           "in [0, 0.01]"));
 }
 
 inline CLI::Validator positive_number() {

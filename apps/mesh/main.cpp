@@ -135,8 +135,10 @@ int main(int argc, char** argv) {
   int threads = 0;
   bool verbose = false, report = false;
   std::string report_json_path;
-  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
-  app.add_option("-o,--output", output_path, "Output mesh (.ply or .obj)")->required();
+  double weld_tolerance = 0;
+  app.add_option("mesh", mesh_path, "Triangle mesh (.obj, .ply or .stl)")->required();
+  gwnrt::apps::add_weld_tolerance_option(app, weld_tolerance);
+  app.add_option("-o,--output", output_path, "Output mesh (.ply, .obj or .stl)")->required();
   auto* res = app.add_option(
       "--resolution", resolution,
       "Cells along the longest side of the mesh's box (default " + std::to_string(options.resolution) + ")");
@@ -182,6 +184,7 @@ int main(int argc, char** argv) {
   // A far-off scan is meshed about its own centre and written back where it was.
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
+  load_options.weld_tolerance = weld_tolerance;
   if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
     return fail(kProgram, s.message());
   if (chatty)
@@ -192,6 +195,7 @@ int main(int argc, char** argv) {
   if (Status a = gwnrt::check_attributes(model.mesh(), options.attributes); !a.ok())
     return fail(kProgram, mesh_path + ": " + a.message());
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, loaded.report);
+  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
   if (!loaded.report.attributes_dropped.empty())
     std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), loaded.report.attributes_dropped.c_str());
 

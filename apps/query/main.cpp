@@ -178,7 +178,9 @@ int main(int argc, char** argv) {
   std::string output_path = "-";
   bool verbose = false;
 
-  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
+  double weld_tolerance = 0;
+  app.add_option("mesh", mesh_path, "Triangle mesh (.obj, .ply or .stl)")->required();
+  gwnrt::apps::add_weld_tolerance_option(app, weld_tolerance);
   app.add_option("--points", points_path, "Points file, one 'x y z' per line ('-' for stdin)")->required();
   app.add_option("--fields", field_names, "Comma-separated outputs: " + valid_field_list())
       ->delimiter(',')
@@ -274,6 +276,7 @@ int main(int argc, char** argv) {
   // by -origin as they are read, the positions written moved back.
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
+  load_options.weld_tolerance = weld_tolerance;
   if (gwnrt::Status s = gwnrt::apps::load_model(mesh_path, model, loaded, build_options, load_options); !s.ok())
     return fail(kProgram, s.message());
   const auto t_parts = std::chrono::steady_clock::now();
@@ -281,6 +284,7 @@ int main(int argc, char** argv) {
     return fail(kProgram, mesh_path + ": " + s.message());
   const gwnrt::MeshLoadReport& report = loaded.report;
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, report);
+  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, report);
   const double load_seconds = loaded.load_seconds;
   const double build_seconds = loaded.build_seconds + gwnrt::apps::seconds_since(t_parts);
 

@@ -90,7 +90,9 @@ int main(int argc, char** argv) {
   int threads = 0;
   bool verbose = false;
 
-  app.add_option("mesh", mesh_path, "Triangle mesh (.obj or .ply)")->required();
+  double weld_tolerance = 0;
+  app.add_option("mesh", mesh_path, "Triangle mesh (.obj, .ply or .stl)")->required();
+  gwnrt::apps::add_weld_tolerance_option(app, weld_tolerance);
   app.add_option("--rays", rays_path, "Rays file, one 'ox oy oz dx dy dz [tnear tfar]' per line ('-' for stdin)")
       ->required();
   app.add_option("--mode", mode, "gwn: S = boundary of {w > level}; solid-angle: {Omega = level mod 4pi}")
@@ -152,6 +154,7 @@ int main(int argc, char** argv) {
   // moved by -origin, the hit positions written moved back.
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
+  load_options.weld_tolerance = weld_tolerance;
   if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
     return fail(kProgram, s.message());
   const gwnrt::dvec3 origin = loaded.report.origin;
@@ -162,6 +165,7 @@ int main(int argc, char** argv) {
   }
   std::string().swap(rays_text);
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, loaded.report);
+  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
   gwnrt::apps::warn_if_level_out_of_reach(kProgram, model.view(), options);
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   RTCDevice device = embree.device;
   RTCScene scene = embree.scene;
   // [readme-embree-begin]
-  GWNRTMesh mesh = gwnrtLoadMesh(path);  // OBJ or PLY; builds the tree once
+  GWNRTMesh mesh = gwnrtLoadMesh(path);  // OBJ, PLY or STL; builds the tree once
   if (!mesh) {
     std::fprintf(stderr, "%s\n", gwnrtGetLastError());
     return 1;

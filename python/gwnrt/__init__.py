@@ -162,6 +162,16 @@ class Model:
         relative to it."""
         return self._origin.copy()
 
+    _load_report = None
+
+    @property
+    def load_report(self) -> Optional[dict]:
+        """For a model from gwnrt.load: the file's format, file_vertices (an STL's corners),
+        vertices_used and positions_used (after welding bit-identical positions),
+        boundary_edges_by_index and boundary_edges (after welding: what the model uses),
+        boundary_loops, tolerance_welded and degenerate_triangles. None for a model from arrays."""
+        return None if self._load_report is None else dict(self._load_report)
+
     # -- the mesh --------------------------------------------------------------------------------
     @property
     def vertices(self) -> np.ndarray:
@@ -319,17 +329,22 @@ def _per_ray(x, k, name):
 
 
 def load(path, *, classify_sheets: bool = True, level: float = 0.5, sheet_method: str = "auto",
-         threads: Optional[int] = None, recentre: bool = False) -> Model:
-    """A Model from an OBJ or PLY file (what the file had that gwnrt does not read is
+         threads: Optional[int] = None, recentre: bool = False, weld_tolerance: float = 0.0) -> Model:
+    """A Model from an OBJ, PLY or STL file (what the file had that gwnrt does not read is
     reported as a warning). recentre: a mesh far from the origin for its size (a georeferenced
     scan) is read in double and moved by -model.origin before float keeps it; subtract origin
-    from the points you ask about and add it to the positions you get (write_mesh's origin=)."""
-    native, notes, origin = _gwnrt.Model.load(os.fspath(path), classify_sheets=classify_sheets, level=level,
-                                              sheet_method=sheet_method, threads=threads, recentre=recentre)
+    from the points you ask about and add it to the positions you get (write_mesh's origin=).
+    Vertices at bit-identical positions are one for the topology (an STL's repeated corners, OBJ
+    seams); weld_tolerance (a fraction of the box's diagonal, at most 0.01) also moves vertices
+    closer than that onto each other. model.load_report says what loading and welding found."""
+    native, notes, origin, load_report = _gwnrt.Model.load(
+        os.fspath(path), classify_sheets=classify_sheets, level=level, sheet_method=sheet_method, threads=threads,
+        recentre=recentre, weld_tolerance=weld_tolerance)
     if notes:
         warnings.warn(f"{os.fspath(path)}: {notes}", stacklevel=2)
     model = Model._from_native(native)
     model._origin = np.array(origin, dtype=np.float64)
+    model._load_report = load_report
     return model
 
 

@@ -256,8 +256,8 @@ def extract_surfaces(paths: Sequence, out_dir, *, format: str = "ply", threads: 
     there is one), writing OUT_DIR/<name>.<format>; returns one report per file, in order: path,
     output, seconds, vertices, triangles, watertight, manifold, closed_manifold, and error (None,
     or why that file failed: the others go on). options: those of gwnrt.Model.extract_surface."""
-    if format not in ("ply", "obj"):
-        raise ValueError(f"format must be 'ply' or 'obj', got '{format}'")
+    if format not in ("ply", "obj", "stl"):
+        raise ValueError(f"format must be 'ply', 'obj' or 'stl', got '{format}'")
     out_dir = os.fspath(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     jobs, taken = [], set()

@@ -124,8 +124,10 @@ void write_mesh(const std::string& path, const py::handle& vertices, const py::h
     options.format = MeshFileFormat::kPly;
   else if (format == "obj")
     options.format = MeshFileFormat::kObj;
+  else if (format == "stl")
+    options.format = MeshFileFormat::kStl;
   else
-    throw py::value_error("format must be 'auto', 'ply' or 'obj', got '" + format + "'");
+    throw py::value_error("format must be 'auto', 'ply', 'obj' or 'stl', got '" + format + "'");
   options.soup = soup;
   const SurfaceMesh mesh = surface_mesh(vertices, faces, normals, uvs, colors, source_triangles, source_barycentrics);
   check(run_released(std::nullopt, [&] { return write_surface_mesh(path, mesh, options); }));

@@ -171,21 +171,33 @@ void bind_model(py::module_& m) {
       .def_static(
           "load",
           [](const std::string& path, bool classify_sheets, float level, const std::string& sheet_method,
-             Threads threads, bool recentre) {
+             Threads threads, bool recentre, double weld_tolerance) {
             const BuildOptions options = build_options(classify_sheets, level, sheet_method);
             Mesh mesh;
             MeshLoadReport report;
             MeshLoadOptions load_options;
             load_options.recentre = recentre;
+            load_options.weld_tolerance = weld_tolerance;
             check(run_released(std::nullopt, [&] { return load_mesh(path, mesh, &report, load_options); }));
             std::string notes = report.warnings;
             if (!report.attributes_dropped.empty())
               notes += (notes.empty() ? "" : "; ") + std::string("dropped: ") + report.attributes_dropped;
             const std::array<double, 3> origin = {report.origin.x, report.origin.y, report.origin.z};
-            return py::make_tuple(build_model(std::move(mesh), options, threads), notes, origin);
+            py::dict weld;
+            weld["format"] = report.format;
+            weld["file_vertices"] = report.file_vertices;
+            weld["vertices_used"] = report.weld.vertices_used;
+            weld["positions_used"] = report.weld.positions_used;
+            weld["boundary_edges_by_index"] = report.weld.boundary_by_index;
+            weld["boundary_edges"] = report.weld.boundary_by_position;
+            weld["boundary_loops"] = report.weld.boundary_loops;
+            weld["tolerance_welded"] = report.tolerance_welded;
+            weld["degenerate_triangles"] = report.degenerate_triangles;
+            return py::make_tuple(build_model(std::move(mesh), options, threads), notes, origin, weld);
           },
           py::arg("path"), py::kw_only(), py::arg("classify_sheets") = true, py::arg("level") = 0.5f,
-          py::arg("sheet_method") = "auto", py::arg("threads") = py::none(), py::arg("recentre") = false)
+          py::arg("sheet_method") = "auto", py::arg("threads") = py::none(), py::arg("recentre") = false,
+          py::arg("weld_tolerance") = 0.0)
       .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model().mesh().positions.size(); })
       .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model().mesh().triangles.size(); })
       .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model().mesh().positions); })

@@ -178,9 +178,9 @@ TEST_F(MeshCliTest, PositiveOptionsSayTheyMustBePositive) {
 
 TEST_F(MeshCliTest, RefusesBadArgumentsAndUnwritableOutput) {
   const std::string mesh = test::quote(test::data_path("bunny.obj"));
-  for (const std::string args :
-       {" --resolution 0", " --cell-size -1", " --resolution 40 --level 0", " --attributes nonsense",
-        " --resolution 40 -o /nonexistent-dir/x.ply", " --resolution 40 -o out.stl"}) {
+  for (const std::string args : {" --resolution 0", " --cell-size -1", " --resolution 40 --level 0",
+                                 " --attributes nonsense", " --resolution 40 -o /nonexistent-dir/x.ply",
+                                 " --resolution 40 -o out.xyz", " --weld-tolerance 0.5", " --weld-tolerance -1"}) {
     const std::string full =
         mesh + (args.find(" -o ") == std::string::npos ? " -o " + test::quote(test::temp_path("x.ply")) : "") + args;
     const test::RunResult r = test::run_program(binary_, full);
@@ -188,6 +188,38 @@ TEST_F(MeshCliTest, RefusesBadArgumentsAndUnwritableOutput) {
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_FALSE(r.err.empty()) << args;
   }
+}
+
+// An STL soup in, an STL out: the soup's corners are welded (the summary says so), and the STL
+// written holds the library's mesh of the same triangles read from an OBJ, facet for facet.
+TEST_F(MeshCliTest, MeshesAnStlSoupIntoAnStl) {
+  const std::string stl = test::data_path("realworld/kuka_kr10r1100sixx_visual_base_link.stl");
+  const std::string out = test::temp_path("kuka_mesh.stl");
+  const test::RunResult r =
+      test::run_program(binary_, test::quote(stl) + " -o " + test::quote(out) + " --resolution 48 -v");
+  ASSERT_TRUE(r.exited && r.exit_code == 0) << r.err;
+  EXPECT_NE(r.err.find("5969 vertices from 35592 corners"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("boundary: 182 edges in 34 loops"), std::string::npos) << r.err;
+  Mesh written, source;
+  ASSERT_TRUE(load_mesh(out, written).ok());
+  ASSERT_TRUE(load_mesh(stl, source).ok());
+  const GwnModel model = test::build_model(std::move(source));
+  SurfaceMesh lib;
+  ASSERT_TRUE(extract_surface(model, options_at(48), lib).ok());
+  ASSERT_EQ(written.triangles.size(), lib.triangles.size());
+  for (size_t t = 0; t < lib.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(written.positions[written.triangles[t][k]], lib.positions[lib.triangles[t][k]]) << "triangle " << t;
+
+  // The tolerance weld closes its cracks: no boundary left.
+  const test::RunResult welded = test::run_program(
+      binary_, test::quote(stl) + " -o " + test::quote(out) + " --resolution 16 -v --weld-tolerance 1e-6");
+  ASSERT_TRUE(welded.exited && welded.exit_code == 0) << welded.err;
+  EXPECT_NE(welded.err.find("moved by the weld tolerance); boundary: 0 edges"), std::string::npos) << welded.err;
+  const test::RunResult refused =
+      test::run_program(binary_, test::quote(stl) + " -o " + test::quote(out) + " --weld-tolerance 0.5");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("--weld-tolerance"), std::string::npos) << refused.err;
 }
 
 }  // namespace

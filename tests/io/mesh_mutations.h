@@ -33,7 +33,7 @@ struct Base {
   const char* name;
   const char* ext;
   std::string bytes;
-  bool binary_body = false;  // a PLY whose body after end_header is binary
+  bool binary_body = false;  // a PLY whose body after end_header is binary, or a binary STL
 };
 
 inline std::vector<Base> bases() {
@@ -42,7 +42,9 @@ inline std::vector<Base> bases() {
           {"tetra_obj", ".obj", kTetraObj},
           {"ply_ascii", ".ply", test::small_ply("ascii", small.positions)},
           {"ply_le", ".ply", test::small_ply("binary_little_endian", small.positions), true},
-          {"ply_be", ".ply", test::small_ply("binary_big_endian", small.positions), true}};
+          {"ply_be", ".ply", test::small_ply("binary_big_endian", small.positions), true},
+          {"stl_ascii", ".stl", test::small_stl(false)},
+          {"stl_binary", ".stl", test::small_stl(true), true}};
 }
 
 // Numbers a file may hold that a reader must refuse or carry safely: beyond float or double, NaN,
@@ -263,9 +265,11 @@ class Mutator {
   std::mt19937 rng_;
 };
 
-// Where the text of a file ends: after end_header for a binary PLY, else its end.
+// Where the text of a file ends: after end_header for a binary PLY, at once for a binary STL,
+// else at its end.
 inline size_t text_size(const Base& base) {
   if (!base.binary_body) return base.bytes.size();
+  if (std::string_view(base.ext) == ".stl") return 0;
   return base.bytes.find("end_header\n") + std::strlen("end_header\n");
 }
 

@@ -401,9 +401,9 @@ TEST_F(TempFiles, FileProblems) {
   EXPECT_EQ(s.code(), StatusCode::kIoError);
   EXPECT_NE(s.message().find(missing), std::string::npos) << s.message();
 
-  s = load_mesh(write("mesh.stl", "solid x\nendsolid x\n"), m);
+  s = load_mesh(write("mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), m);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find("'.stl'"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("'.off'"), std::string::npos) << s.message();
 
   s = load_mesh(write("no_extension", kSmallObj), m);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);

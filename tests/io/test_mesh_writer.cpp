@@ -394,14 +394,14 @@ TEST_F(MeshWriter, WriteFailureIsReportedAndLeavesNoFile) {
 
 TEST_F(MeshWriter, UnknownExtensionIsRefused) {
   const SurfaceMesh m = cube();
-  for (const char* name : {"cube.stl", "cube", "cube.ply.gz"}) {
+  for (const char* name : {"cube.off", "cube", "cube.ply.gz"}) {
     SCOPED_TRACE(name);
     const std::string file = path(name);
     const Status s = write_surface_mesh(file, m);
     expect_error(s, StatusCode::kInvalidArgument, file, "extension");
     EXPECT_FALSE(fs::exists(file));
   }
-  EXPECT_NE(write_surface_mesh(path("cube.stl"), m).message().find("'.stl'"), std::string::npos);
+  EXPECT_NE(write_surface_mesh(path("cube.off"), m).message().find("'.off'"), std::string::npos);
 }
 
 TEST_F(MeshWriter, IndexOutOfRangeNamesTheTriangle) {

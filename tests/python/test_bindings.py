@@ -321,6 +321,29 @@ def test_load(data_dir):
     assert dragon.triangle_count > 0
 
 
+def test_load_stl_welds_and_reports(data_dir, tmp_path):
+    import os
+    stl = os.path.join(data_dir, "realworld", "kuka_kr10r1100sixx_visual_base_link.stl")
+    model = gwnrt.load(stl)
+    report = model.load_report
+    assert report["format"] == "stl-binary"
+    assert (report["file_vertices"], report["positions_used"]) == (35592, 5969)
+    assert (report["boundary_edges"], report["boundary_loops"], report["tolerance_welded"]) == (182, 34, 0)
+    assert model.boundary_segment_count == 182
+    welded = gwnrt.load(stl, weld_tolerance=1e-6)
+    assert welded.load_report["tolerance_welded"] > 0
+    assert welded.load_report["boundary_edges"] == 0 and welded.boundary_segment_count == 0
+    with pytest.raises(ValueError, match="weld tolerance"):
+        gwnrt.load(stl, weld_tolerance=0.5)
+    assert gwnrt.Model(model.vertices, model.faces).load_report is None
+    # Written as STL and read back: the same triangles.
+    mesh = model.extract_surface(resolution=24)
+    gwnrt.write_mesh(tmp_path / "out.stl", mesh)
+    back = gwnrt.load(tmp_path / "out.stl", classify_sheets=False)
+    assert back.triangle_count == len(mesh.faces)
+    np.testing.assert_array_equal(back.vertices[back.faces], mesh.vertices[mesh.faces])
+
+
 def test_load_errors(tmp_path):
     with pytest.raises(OSError, match="cannot open"):
         gwnrt.load(tmp_path / "missing.obj")
@@ -331,6 +354,7 @@ def test_load_errors(tmp_path):
         "no_x.ply": ("ply\nformat ascii 1.0\nelement vertex 1\nproperty float y\nend_header\n1\n",
                      "no 'x' property"),
         "mesh.xyz": ("v 0 0 0\n", "unsupported mesh file extension"),
+        "cut.stl": ("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "ends inside facet 0"),
     }
     for name, (text, message) in cases.items():
         (tmp_path / name).write_text(text)

@@ -274,10 +274,10 @@ def test_write_mesh_arrays_and_format(tmp_path, octahedron):
 
 def test_write_mesh_errors(tmp_path, octahedron):
     v, f = octahedron
-    with pytest.raises(ValueError, match="format must be 'auto', 'ply' or 'obj', got 'stl'"):
-        gwnrt.write_mesh(tmp_path / "x.obj", v, f, format="stl")
+    with pytest.raises(ValueError, match="format must be 'auto', 'ply', 'obj' or 'stl', got 'off'"):
+        gwnrt.write_mesh(tmp_path / "x.obj", v, f, format="off")
     with pytest.raises(ValueError, match="extension"):
-        gwnrt.write_mesh(tmp_path / "x.stl", v, f)
+        gwnrt.write_mesh(tmp_path / "x.off", v, f)
     bad = f.copy()
     bad[5, 2] = len(v)
     with pytest.raises(ValueError, match=r"face 5 has vertex index 6, outside \[0, 6\)"):

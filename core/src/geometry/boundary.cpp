@@ -10,38 +10,12 @@
 #include <tbb/parallel_sort.h>
 
 #include "gwnrt/geometry/boundary.h"
+#include "gwnrt/geometry/weld.h"
 
 namespace gwnrt {
-namespace {
-
-// Welds vertices with bit-identical positions (after folding -0 into +0) so that half-edges
-// cancel geometrically, not only by index: OBJ soups often repeat shared corners.
-std::vector<uint32_t> weld_by_position(const std::vector<vec3>& positions) {
-  const size_t n = positions.size();
-  auto key = [&](uint32_t i) {
-    std::array<uint32_t, 3> k;
-    for (int a = 0; a < 3; ++a) {
-      const float v = positions[i][a] + 0.0f;  // -0 + 0 = +0
-      std::memcpy(&k[a], &v, sizeof v);
-    }
-    return k;
-  };
-  std::vector<uint32_t> order(n);
-  for (size_t i = 0; i < n; ++i) order[i] = uint32_t(i);
-  tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const auto ka = key(a), kb = key(b);
-    return ka != kb ? ka < kb : a < b;
-  });
-  std::vector<uint32_t> canonical(n);
-  for (size_t i = 0; i < n; ++i)
-    canonical[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? canonical[order[i - 1]] : order[i];
-  return canonical;
-}
-
-}  // namespace
 
 BoundaryCurve extract_boundary(const Mesh& mesh) {
-  const std::vector<uint32_t> canonical = weld_by_position(mesh.positions);
+  const std::vector<uint32_t> canonical = vertices_by_position(mesh.positions);
   struct HalfEdge {
     uint64_t key;  // (min << 32) | max of the welded endpoints
     int32_t sign;  // +1 when the triangle walks min -> max

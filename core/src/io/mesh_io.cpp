@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/weld.h"
 #include "gwnrt/io/read_file.h"
 #include "io/readers.h"
 #include "io/text.h"
@@ -44,14 +45,19 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
     return {StatusCode::kInvalidArgument,
             cat(path, ": MeshLoadOptions::recentre needs a MeshLoadReport to return the origin in")};
   const std::string ext = lower_extension(path);
-  const bool is_obj = ext == ".obj";
-  if (!is_obj && ext != ".ply") {
+  const bool is_obj = ext == ".obj", is_stl = ext == ".stl";
+  if (!is_obj && !is_stl && ext != ".ply") {
     return {StatusCode::kInvalidArgument,
-            cat(path, ": unsupported mesh file extension '", ext, "' (expected .obj or .ply)")};
+            cat(path, ": unsupported mesh file extension '", ext, "' (expected .obj, .ply or .stl)")};
+  }
+  if (!(options.weld_tolerance >= 0 && options.weld_tolerance <= kMaxWeldTolerance)) {
+    return {StatusCode::kInvalidArgument, cat(path, ": weld tolerance ", options.weld_tolerance, " is not in [0, ",
+                                              kMaxWeldTolerance, "] (a fraction of the box's diagonal)")};
   }
   std::string data;
   ReadLimits limits;
-  if (!is_obj) limits.text_end = io::ply_text_end;  // lines are checked in the header and an ASCII body
+  // Lines are checked in a PLY's header and ASCII body, and in an ASCII STL.
+  if (!is_obj) limits.text_end = is_stl ? io::stl_text_end : io::ply_text_end;
   if (Status s = read_file(path, data, limits); !s.ok()) return s;
   // A UTF-8 byte-order mark (some Windows editors write one) is not content: left in, it would
   // glue itself to the first keyword and the OBJ reader would skip that line.
@@ -62,8 +68,11 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
   MeshLoadReport rep;
   std::vector<dvec3> world;
   std::vector<dvec3>* const wide = options.recentre ? &world : nullptr;
-  Status s = is_obj ? io::read_obj(path, content, m, rep, wide) : io::read_ply(path, content, m, rep, wide);
+  Status s = is_obj   ? io::read_obj(path, content, m, rep, wide)
+             : is_stl ? io::read_stl(path, content, m, rep, wide)
+                      : io::read_ply(path, content, m, rep, wide);
   if (!s.ok()) return s;
+  if (!is_stl) rep.file_vertices = m.positions.size();
   if (s = validate_mesh(m, path); !s.ok()) return s;
   if (options.recentre) {
     rep.origin = recentred_origin(world, m.triangles);
@@ -82,6 +91,16 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
     }
   }
 
+  if (options.weld_tolerance > 0) {
+    dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const uvec3& t : m.triangles)
+      for (int k = 0; k < 3; ++k) {
+        lo = glm::min(lo, dvec3(m.positions[t[k]]));
+        hi = glm::max(hi, dvec3(m.positions[t[k]]));
+      }
+    rep.tolerance_welded = weld_within(m, options.weld_tolerance * glm::length(hi - lo));
+  }
+  rep.weld = summarize_weld(m);
   rep.vertex_count = m.positions.size();
   rep.triangle_count = m.triangles.size();
   rep.uv_count = m.uvs.size();

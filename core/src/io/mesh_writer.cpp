@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -364,6 +365,29 @@ void write_obj(OutFile& out, const SurfaceMesh& m, bool soup, size_t nverts, con
   }
 }
 
+// STL (binary): per facet its unit normal (from the corners, in double; 0 for a zero-area facet),
+// the three corners and a zero attribute. The header does not begin with "solid", which some
+// readers take for ASCII.
+void write_stl(OutFile& out, const SurfaceMesh& m) {
+  std::string header = "binary STL written by gwnrt";
+  header.resize(80, ' ');
+  out.write(header);
+  char count[4];
+  put_u32(count, static_cast<uint32_t>(m.triangles.size()));
+  out.write(std::string_view(count, 4));
+  for (const uvec3& t : m.triangles) {
+    const dvec3 a(m.positions[t.x]), b(m.positions[t.y]), c(m.positions[t.z]);
+    const dvec3 n = glm::cross(b - a, c - a);
+    const double len = glm::length(n);
+    char* p = out.room();
+    p = put_f32(p, len > 0 ? vec3(n / len) : vec3(0.0f));
+    for (int k = 0; k < 3; ++k) p = put_f32(p, m.positions[t[k]]);
+    *p++ = 0;
+    *p++ = 0;
+    out.commit(p);
+  }
+}
+
 Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
   MeshFileFormat format = options.format;
   if (format == MeshFileFormat::kAuto) {
@@ -372,9 +396,11 @@ Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const M
       format = MeshFileFormat::kPly;
     } else if (ext == ".obj") {
       format = MeshFileFormat::kObj;
+    } else if (ext == ".stl") {
+      format = MeshFileFormat::kStl;
     } else {
       return {StatusCode::kInvalidArgument,
-              cat(path, ": unknown mesh file extension '", ext, "' (expected .ply or .obj, or give the format)")};
+              cat(path, ": unknown mesh file extension '", ext, "' (expected .ply, .obj or .stl, or give the format)")};
     }
   }
   if (Status s = check_mesh(path, mesh); !s.ok()) return s;
@@ -383,6 +409,20 @@ Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const M
     return {StatusCode::kInvalidArgument, cat(path, ": the origin added to the positions is not finite (", origin.x,
                                               ", ", origin.y, ", ", origin.z, ")")};
 
+  if (format == MeshFileFormat::kStl) {
+    // STL holds float coordinates and nothing else: a recentred mesh would be rounded where it lies.
+    if (origin != dvec3(0.0)) {
+      return {StatusCode::kInvalidArgument,
+              cat(path, ": STL holds float coordinates, which would round this mesh's positions where it lies (it was ",
+                  "recentred about (", origin.x, ", ", origin.y, ", ", origin.z, ")); write .ply or .obj")};
+    }
+    if (mesh.triangles.size() > std::numeric_limits<uint32_t>::max())
+      return {StatusCode::kInvalidMesh, cat(path, ": too many triangles for STL (", mesh.triangles.size(), ")")};
+    OutFile out(path);
+    if (Status s = out.open(); !s.ok()) return s;
+    write_stl(out, mesh);
+    return out.close();
+  }
   // PLY indices are declared int; OBJ readers (ours included) index with 32 bits.
   const bool ply = format == MeshFileFormat::kPly;
   const uint64_t limit = ply ? uint64_t(1) << 31 : uint64_t(1) << 32;

@@ -1,4 +1,4 @@
-// Strict OBJ and PLY readers. General-purpose loaders turn a malformed number into 0, accept
+// Strict OBJ, PLY and STL readers. General-purpose loaders turn a malformed number into 0, accept
 // out-of-range indices or stop quietly at a truncated file; a silently wrong mesh gives
 // silently wrong winding numbers, so here every such defect is an error that names the file
 // and the line or element.
@@ -27,6 +27,12 @@ Status read_obj(const std::string& path, std::string_view data, Mesh& mesh, Mesh
                 std::vector<dvec3>* world);
 Status read_ply(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report,
                 std::vector<dvec3>* world);
+
+Status read_stl(const std::string& path, std::string_view data, Mesh& mesh, MeshLoadReport& report,
+                std::vector<dvec3>* world);
+
+// ReadLimits::text_end for an STL file: 0 (no lines) for a binary one, kAllText for ASCII.
+size_t stl_text_end(std::string_view head);
 
 // ReadLimits::text_end for a PLY file: where its header ends when the body is binary (kAllText for
 // an ASCII body or a file that is not a PLY; kTextNotEnded before the end_header line).

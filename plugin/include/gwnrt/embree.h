@@ -55,9 +55,9 @@ typedef struct GWNRTOptions {
 
 /* Copies xyz (3 floats per vertex) and triangles (3 indices per triangle) and builds. */
 GWNRTMesh gwnrtNewMesh(const float* xyz, size_t vertexCount, const uint32_t* triangles, size_t triangleCount);
-/* OBJ or PLY. */
+/* OBJ, PLY or STL. */
 GWNRTMesh gwnrtLoadMesh(const char* path);
-/* OBJ or PLY, its coordinates read in double; a mesh far from the origin for its size (a
+/* OBJ, PLY or STL, its coordinates read in double; a mesh far from the origin for its size (a
  * georeferenced scan in UTM metres, which gwnrtLoadMesh refuses: float keeps too little of it)
  * is moved by -origin, which is returned (0, 0, 0 when it was not moved). The geometry is then in
  * those moved coordinates: place it with an instance that adds origin back, composing the two

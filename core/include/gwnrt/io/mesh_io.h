@@ -6,22 +6,28 @@
 
 #include "gwnrt/base/status.h"
 #include "gwnrt/geometry/mesh.h"
+#include "gwnrt/geometry/weld.h"
 
 namespace gwnrt {
 
 // What loading found, for the user to read; none of it is an error.
 struct MeshLoadReport {
   std::size_t vertex_count = 0;
+  std::size_t file_vertices = 0;         // as the file lists them: an STL lists 3 a facet, merged when identical
   std::size_t triangle_count = 0;        // after fanning polygons
   std::size_t polygons_fanned = 0;       // input faces with more than three corners
   std::size_t degenerate_triangles = 0;  // zero area (repeated or collinear corners): contribute nothing
-  std::string format;                    // "obj", "ply-ascii", "ply-binary-le", "ply-binary-be"
-  std::size_t uv_count = 0;              // texture coordinates kept (Mesh::uvs)
-  bool has_colors = false;               // vertex colours kept (Mesh::colors)
+  std::string format;        // "obj", "ply-ascii", "ply-binary-le", "ply-binary-be", "stl-ascii", "stl-binary"
+  std::size_t uv_count = 0;  // texture coordinates kept (Mesh::uvs)
+  bool has_colors = false;   // vertex colours kept (Mesh::colors)
   // Empty, or why UVs or colours in the file were not kept (e.g. only some faces have them).
   std::string attributes_dropped;
   // Empty, or what was skipped that the user may not expect (OBJ lines with unknown statements).
   std::string warnings;
+  // Topology by position (what ∂M, the cone and the sheets use) against topology by index.
+  WeldSummary weld;
+  // Vertices moved onto a neighbour by MeshLoadOptions::weld_tolerance (0 without it).
+  std::size_t tolerance_welded = 0;
   // Where the mesh's coordinate 0 lies in the file's coordinates: Mesh::positions are the file's
   // minus this. Zero unless MeshLoadOptions::recentre moved the mesh.
   dvec3 origin{0.0};
@@ -44,7 +50,13 @@ struct MeshLoadOptions {
   // subtracts origin from the points and rays it asks about, in double, and adds it back to the
   // positions it writes out (MeshWriteOptions::origin). Needs a report to return origin in.
   bool recentre = false;
+  // Files written with rounding leave cracks between vertices that were one: with a tolerance t > 0
+  // every vertex within t times the box's diagonal of another is moved onto it (weld_within), which
+  // moves triangles by up to that much. 0: vertices are one only where their positions are
+  // bit-identical (always so, whatever this says). At most kMaxWeldTolerance.
+  double weld_tolerance = 0;
 };
+inline constexpr double kMaxWeldTolerance = 0.01;
 
 // The origin that recentring moves geometry whose box is [lo, hi] (in double) by: zero when the
 // box lies within kRecentreCoordinatePerDiagonal diagonals of the origin and within
@@ -58,7 +70,8 @@ dvec3 recentring_origin(const dvec3& lo, const dvec3& hi, double max_coordinate)
 // a zero origin.
 std::string recentred_note(const dvec3& origin);
 
-// Loads an OBJ or PLY file (chosen by the extension, case-insensitive). Polygons are fanned
+// Loads an OBJ, PLY or STL file (chosen by the extension, case-insensitive; an STL is binary when
+// its size is 84 + 50 bytes a facet, else ASCII). Polygons are fanned
 // into triangles. Texture coordinates (OBJ vt; PLY u v, s t, texture_u texture_v, texture_s
 // texture_t per vertex, or a face texcoord list) and vertex colours (OBJ v x y z r g b; PLY red
 // green blue [alpha], integers scaled to [0, 1]) are kept when every face or vertex has them. Fails, naming the file

@@ -1,4 +1,5 @@
-// Writing a SurfaceMesh (the mesher's output) to binary PLY or OBJ (core/src/io/mesh_writer.cpp).
+// Writing a SurfaceMesh (the mesher's output) to binary PLY, OBJ or binary STL
+// (core/src/io/mesh_writer.cpp).
 //
 // PLY is the complete format: it keeps every per-vertex array SurfaceMesh has, in binary so
 // that a file read back holds the very floats that were written. OBJ is for tools that read
@@ -14,6 +15,9 @@
 // OBJ layout: `v x y z [r g b]`, `vn`, `vt`, then `f` with 1-based indices in the form that what
 //   is present implies (v, v//vn, v/vt/vn, v/vt). Alpha and the source arrays have no place in
 //   OBJ and are left out.
+// STL layout: binary, an 80-byte header that does not begin "solid", the count, then per triangle
+//   its normal from the corners, the corners in float and a zero attribute; no other array. A mesh
+//   with an origin is refused (STL's float would round it where it lies).
 #pragma once
 
 #include <string>
@@ -24,9 +28,10 @@
 namespace gwnrt {
 
 enum class MeshFileFormat {
-  kAuto,  // by the path's extension, case-insensitive: .ply or .obj; any other is refused
+  kAuto,  // by the path's extension, case-insensitive: .ply, .obj or .stl; any other is refused
   kPly,
-  kObj
+  kObj,
+  kStl  // binary STL: positions only, a soup by the format's nature
 };
 
 struct MeshWriteOptions {
