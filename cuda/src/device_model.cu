@@ -50,13 +50,15 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
     const std::span<const ConeSegment> segments = model.cone_segments();
     for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()),
                      b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
-                     b->endpoints.upload(st.endpoints), b->segment_ids.upload(st.segment_ids),
+                     b->segment_lengths.upload(st.lengths), b->endpoints.upload(st.endpoints),
+                     b->segment_ids.upload(st.segment_ids),
                      b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
       if (!s.ok()) return s;
     v.smooth_regions = b->smooth_regions.get();
     v.cone_boundary_lengths = b->cone_lengths.get();
     v.cone_segments = b->cone_segments.get();
     v.boundary.bvh.nodes = b->segment_nodes.get();
+    v.boundary.lengths = b->segment_lengths.get();
     v.boundary.endpoints = b->endpoints.get();
     v.boundary.segment_ids = b->segment_ids.get();
     b->view = v;

@@ -58,6 +58,7 @@ struct DeviceModel::Buffers {
   DeviceBuffer<WideNodeLength> cone_lengths;
   DeviceBuffer<ConeSegment> cone_segments;
   DeviceBuffer<WideNode> segment_nodes;
+  DeviceBuffer<WideNodeLength> segment_lengths;
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
   DeviceBuffer<SmoothRegion> smooth_regions;

@@ -377,7 +377,12 @@ TEST_F(QueryCliTest, SignedDistanceFieldsMatchLibraryAtAnyLevel) {
       EXPECT_EQ(cell_float(row[5]), e[i].sdf.first_order) << "row " << i;
       EXPECT_EQ(cell_float(row[6]), e[i].sdf.second_order) << "row " << i;
       EXPECT_EQ(cell_float(row[7]), e[i].sdf.sheet_distance) << "row " << i;
-      for (int a = 0; a < 3; ++a) EXPECT_EQ(cell_float(row[8 + a]), e[i].projection.point[a]) << "row " << i;
+      // Newton's iterates carry ∇w, whose sums g++ contracts into fused multiply-adds per inlined
+      // copy: the program's and the test's copies may differ in the last bits (docs/design.md §7).
+      for (int a = 0; a < 3; ++a)
+        EXPECT_NEAR(cell_float(row[8 + a]), e[i].projection.point[a],
+                    1e-6f * glm::length(model.bounds().hi - model.bounds().lo))
+            << "row " << i;
       EXPECT_EQ(cell_float(row[11]), float(e[i].projection.iterations)) << "row " << i;
       EXPECT_EQ(row[12], e[i].projection.converged ? "1" : "0") << "row " << i;
       EXPECT_EQ(cell_float(row[13]), e[i].harnack_bound) << "row " << i;

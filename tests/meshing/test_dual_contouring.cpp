@@ -59,7 +59,9 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
       for (int k = 0; k < 8; ++k) exact[k] = winding_number_crossing<false, false>(view, points[k]).w;
       for (const float level : {0.5f, exact[3] + 1e-4f, exact[5] - 1e-3f, exact[0] + 0.015f}) {
         float w[8];
-        corner_winding_values(view, points, axis, sign, level, w);
+        int jumps[8];
+        mesh_jumps_along_axis(view, points, axis, sign, jumps);
+        for (int k = 0; k < 8; ++k) w[k] = corner_winding_value(view, points[k], axis, sign, jumps[k], level);
         for (int k = 0; k < 8; ++k) {
           EXPECT_EQ(w[k] > level, exact[k] > level) << name << " line " << line << " level " << level;
           screened += w[k] != exact[k];

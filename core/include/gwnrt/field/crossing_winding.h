@@ -238,6 +238,13 @@ GWNRT_HD GWNRT_FORCEINLINE float crossing_winding(const Cone& cone, int mesh_jum
   return float(cone.jumps - mesh_jumps) + cone.winding();
 }
 
+// ∇w = ∇w_C from a traversal that summed the gradient: far clusters' expansions and the near
+// triangles' Biot–Savart sum.
+template <class Cone>
+GWNRT_HD GWNRT_FORCEINLINE vec3 cone_gradient(const Cone& cone) {
+  return cone.far_field.gradient * kInv4Pi + saturated_float(cone.near_gradient.total() * (0.25 * kInvPi));
+}
+
 }  // namespace detail
 
 // w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
@@ -316,9 +323,7 @@ GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x
     if (x_on_mesh) return winding_number_taylor<2, WantGradient, WantHessian>(m.triangles, x_in, cone_beta);
     WindingSample out;
     out.w = detail::crossing_winding(cone, mesh_jumps);
-    if constexpr (WantGradient)
-      out.gradient =
-          cone.far_field.gradient * kInv4Pi + detail::saturated_float(cone.near_gradient.total() * (0.25 * kInvPi));
+    if constexpr (WantGradient) out.gradient = detail::cone_gradient(cone);
     if constexpr (WantHessian) {
       out.hessian = cone.far_field.hessian * kInv4Pi;
       out.hessian += detail::saturated_float(cone.near_hessian * (0.25 * kInvPi));
@@ -336,20 +341,16 @@ GWNRT_HD inline WindingSample winding_number_crossing(const ModelView& m, const 
                        : winding_number_crossing<false, false>(m, x, kConeBeta, stats);
 }
 
-// w at Count points along one line parallel to axis `axis`, in ascending order along the
-// direction sign · e_axis (grid corners: meshing/), each exactly as winding_number_crossing gives
-// it but with M's crossings found once: the ray from the first point along that direction meets,
-// at t >= the offset of point k, every crossing ahead of point k. The cone is traversed per point
-// (its field differs), along the same direction, its clusters expanded beyond cone_beta radii. A
-// point exactly on C takes winding_number_crossing's nudged evaluation.
+// M's jumps ahead of each of Count points along one line parallel to axis `axis`, in ascending
+// order along the direction sign · e_axis (grid corners: meshing/): the ray from the first point
+// meets, at t >= the offset of point k, every crossing ahead of point k, so M is walked once.
 template <int Count>
-GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis, float sign,
-                                         float (&out)[Count], float cone_beta = kConeBeta) {
+GWNRT_HD void mesh_jumps_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis, float sign,
+                                    int (&mesh_jumps)[Count]) {
   vec3 direction(0.0f);
   direction[axis] = sign;
   const RayFrame line = make_ray_frame(points[0], direction);
   float offset[Count];
-  int mesh_jumps[Count];
   for (int k = 0; k < Count; ++k) {
     offset[k] = (points[k][axis] - points[0][axis]) * sign;
     mesh_jumps[k] = 0;
@@ -357,13 +358,29 @@ GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points
   visit_axis_crossings(m.triangles.bvh, m.triangles.vertices, line, 0.0f, [&](uint32_t, float t, int jump) {
     for (int k = 0; k < Count; ++k) mesh_jumps[k] += t >= offset[k] ? jump : 0;
   });
-  for (int k = 0; k < Count; ++k) {
-    const RayFrame frame = make_ray_frame(points[k], direction);
-    typename detail::ConeCrossingVisitor<false, false>::type cone(m.cone, frame, points[k], cone_beta, nullptr);
-    cone.traverse();
-    out[k] = cone.on_cone ? winding_number_crossing<false, false>(m, points[k]).w
-                          : detail::crossing_winding(cone, mesh_jumps[k]);
-  }
+}
+
+// w at x given M's jumps ahead of it along (axis, sign): the cone traversed along the same
+// direction, its clusters expanded beyond cone_beta radii. A point exactly on C takes
+// winding_number_crossing's nudged evaluation.
+GWNRT_HD inline float winding_from_mesh_jumps(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
+                                              float cone_beta = kConeBeta) {
+  vec3 direction(0.0f);
+  direction[axis] = sign;
+  const RayFrame frame = make_ray_frame(x, direction);  // the visitor keeps a reference
+  typename detail::ConeCrossingVisitor<false, false>::type cone(m.cone, frame, x, cone_beta, nullptr);
+  cone.traverse();
+  return cone.on_cone ? winding_number_crossing<false, false>(m, x).w : detail::crossing_winding(cone, mesh_jumps);
+}
+
+// w at Count points along one line (mesh_jumps_along_axis), each exactly as winding_number_crossing
+// gives it but with M's crossings found once.
+template <int Count>
+GWNRT_HD void winding_numbers_along_axis(const ModelView& m, const vec3 (&points)[Count], int axis, float sign,
+                                         float (&out)[Count], float cone_beta = kConeBeta) {
+  int mesh_jumps[Count];
+  mesh_jumps_along_axis(m, points, axis, sign, mesh_jumps);
+  for (int k = 0; k < Count; ++k) out[k] = winding_from_mesh_jumps(m, points[k], axis, sign, mesh_jumps[k], cone_beta);
 }
 
 }  // namespace gwnrt

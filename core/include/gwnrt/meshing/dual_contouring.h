@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "gwnrt/base/atomics.h"
+#include "gwnrt/field/box_winding.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
@@ -63,28 +64,156 @@ GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local)
 inline constexpr float kCornerScreenBeta = 2.0f;
 inline constexpr float kCornerScreenMargin = 2e-2f;
 
-template <int Count>
-GWNRT_HD void corner_winding_values(const ModelView& m, const vec3 (&points)[Count], int axis, float sign, float level,
-                                    float (&out)[Count]) {
-  if (m.cone.triangle_count == 0) {  // no cone: the crossings alone, exact
-    winding_numbers_along_axis(m, points, axis, sign, out);
-    return;
-  }
-  winding_numbers_along_axis(m, points, axis, sign, out, kCornerScreenBeta);
-  for (int k = 0; k < Count; ++k)
-    if (fabsf(out[k] - level) < kCornerScreenMargin) out[k] = winding_number_crossing<false, false>(m, points[k]).w;
+// w at a corner from M's jumps ahead of it: screened, then exact near the level.
+GWNRT_HD inline float corner_winding_value(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
+                                           float level) {
+  const float w = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerScreenBeta);
+  return fabsf(w - level) < kCornerScreenMargin ? winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps) : w;
 }
 
+// The axis ray a block's corners take: the one by which its centre (corner 4, 4, 4 of the block)
+// leaves M's box soonest.
+struct BlockRay {
+  vec3 centre;
+  int axis;
+  float sign;
+};
+GWNRT_HD inline BlockRay block_ray(const MeshGrid& grid, const Aabb& bounds, const GridCoord& b) {
+  const int32_t half = kBlockCells / 2;
+  const vec3 centre =
+      grid.corner_position({b.x * kBlockCells + half, b.y * kBlockCells + half, b.z * kBlockCells + half});
+  const RayFrame exit = shortest_exit_axis_ray(bounds, centre);
+  return {centre, exit.kz, exit.sz > 0.0f ? 1.0f : -1.0f};
+}
+
+// Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
+// first-order centres at three scales: the block (8³ corners), its eighths (4³: their own,
+// tighter bounds) where the block's estimate may leave some of their corners unsettled or the
+// block has no bounds (∂M in it), and their eighths (2³) where that of the eighth may, unless S
+// passes through (its estimate straddles a level: those corners are evaluated anyway). The
+// block's ray is the first of the six axis directions, nearest exit first, whose swept box holds
+// no ∂M (else the nearest exit's). A corner takes the finest centre that holds it.
+inline constexpr int kBlockWindingPoints = 1 + 8 + 64;
+struct BlockWinding {
+  BoxFieldBounds bounds[9];  // the block, its eighths (index x + 2y + 4z)
+  uint64_t fine = 0;         // bit i: point[9 + i] computed (2³ corners, index x + 4y + 16z)
+  uint32_t mid = 0;          // bit i: point[1 + i] computed
+  bool block = false;        // point[0] computed
+  int32_t axis = 2;
+  float sign = 1.0f;
+  TaylorPoint point[kBlockWindingPoints];
+  GWNRT_HD bool any() const { return block || mid || fine; }
+};
+
+// The box of the corners [first, first + count) of block b along each axis.
+GWNRT_HD inline Aabb corner_box(const MeshGrid& grid, const GridCoord& b, const GridCoord& first, int count) {
+  Aabb box;
+  box.lo =
+      grid.corner_position({b.x * kBlockCells + first.x, b.y * kBlockCells + first.y, b.z * kBlockCells + first.z});
+  box.hi = grid.corner_position({b.x * kBlockCells + first.x + count - 1, b.y * kBlockCells + first.y + count - 1,
+                                 b.z * kBlockCells + first.z + count - 1});
+  return box;
+}
+
+struct BlockWindingPass {
+  SparseGridView view;
+  ModelView model;
+  float level;
+  BlockWinding* out;
+
+  GWNRT_HD void operator()(uint64_t slot) const {
+    BlockWinding& w = out[slot];
+    w = BlockWinding{};
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+    const Aabb block = corner_box(view.grid, b, {0, 0, 0}, kBlockCells);
+    const vec3 centre = block.centre();
+    choose_ray(block, centre, w);
+    if (w.bounds[0].usable) {
+      w.block = taylor_point(model, centre, w.axis, w.sign, w.point[0]);
+      bool straddles = false;
+      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level, straddles)) return;
+    }
+    for (int i = 0; i < 8; ++i) {
+      const GridCoord first{4 * (i & 1), 4 * ((i >> 1) & 1), 4 * (i >> 2)};
+      const Aabb mid = corner_box(view.grid, b, first, 4);
+      bool straddles = false;
+      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level, straddles)) continue;
+      BoxFieldBounds& bounds = w.bounds[1 + i];
+      bounds = box_field_bounds(model, mid, w.axis, w.sign);
+      if (!bounds.usable) continue;
+      const bool mid_ok = taylor_point(model, mid.centre(), w.axis, w.sign, w.point[1 + i]);
+      if (mid_ok) w.mid |= 1u << i;
+      for (int j = 0; j < 8; ++j) {
+        const GridCoord f{first.x + 2 * (j & 1), first.y + 2 * ((j >> 1) & 1), first.z + 2 * (j >> 2)};
+        const Aabb fine = corner_box(view.grid, b, f, 2);
+        if (mid_ok &&
+            (!taylor_may_leave_unsettled(w.point[1 + i], bounds, mid.centre(), fine, level, straddles) || straddles))
+          continue;
+        const int index = f.x / 2 + 4 * (f.y / 2) + 16 * (f.z / 2);
+        if (taylor_point(model, fine.centre(), w.axis, w.sign, w.point[9 + index])) w.fine |= uint64_t(1) << index;
+      }
+    }
+  }
+
+  // The six axis directions by how soon the block's centre leaves M's box along them: the first
+  // whose swept box holds no ∂M, with its bounds; else the first.
+  GWNRT_HD void choose_ray(const Aabb& block, const vec3& centre, BlockWinding& w) const {
+    float exit[6];
+    for (int d = 0; d < 6; ++d)
+      exit[d] = d & 1 ? centre[d / 2] - model.bounds.lo[d / 2] : model.bounds.hi[d / 2] - centre[d / 2];
+    int order[6] = {0, 1, 2, 3, 4, 5};
+    for (int i = 1; i < 6; ++i)
+      for (int j = i; j > 0 && exit[order[j]] < exit[order[j - 1]]; --j) {
+        const int t = order[j];
+        order[j] = order[j - 1];
+        order[j - 1] = t;
+      }
+    for (int i = 0; i < 6; ++i) {
+      const int axis = order[i] / 2;
+      const float sign = order[i] & 1 ? -1.0f : 1.0f;
+      const BoxFieldBounds bounds = box_field_bounds(model, block, axis, sign);
+      if (i == 0 || bounds.usable) {
+        w.axis = axis;
+        w.sign = sign;
+        w.bounds[0] = bounds;
+      }
+      if (bounds.usable) return;
+    }
+  }
+
+  // w − w* at corner `local` (at x) from the finest centre that holds it, or NaN.
+  GWNRT_HD static float estimate(const MeshGrid& grid, const GridCoord& b, const BlockWinding& w,
+                                 const GridCoord& local, const vec3& x, int jumps, float level) {
+    const int fine = local.x / 2 + 4 * (local.y / 2) + 16 * (local.z / 2);
+    const int mid = local.x / 4 + 2 * (local.y / 4) + 4 * (local.z / 4);
+    float f = __builtin_nanf("");
+    if ((w.fine >> fine) & 1u) {
+      const vec3 centre = corner_box(grid, b, {local.x & ~1, local.y & ~1, local.z & ~1}, 2).centre();
+      f = taylor_estimate(w.point[9 + fine], w.bounds[1 + mid], jumps, x - centre, level);
+    }
+    if (!(f == f) && ((w.mid >> mid) & 1u)) {
+      const vec3 centre = corner_box(grid, b, {local.x & ~3, local.y & ~3, local.z & ~3}, 4).centre();
+      f = taylor_estimate(w.point[1 + mid], w.bounds[1 + mid], jumps, x - centre, level);
+    }
+    if (!(f == f) && w.block) {
+      const vec3 centre = corner_box(grid, b, {0, 0, 0}, kBlockCells).centre();
+      f = taylor_estimate(w.point[0], w.bounds[0], jumps, x - centre, level);
+    }
+    return f;
+  }
+};
+
 // One column of a slot's corners (item = slot · kBlockCells² + column): w − w* where needed, NaN
-// elsewhere. With the exact method and the whole column needed, M's crossings are found once
-// for its kBlockCells corners (winding_numbers_along_axis), along the axis and direction by
-// which the block's centre leaves M's box soonest: fewer crossings and nodes on the way than a
-// fixed +z.
+// elsewhere. With the exact method M's crossings are found once for the column's kBlockCells
+// corners (mesh_jumps_along_axis), along the block's ray (block_ray): fewer crossings and nodes
+// on the way than a fixed +z. Where the block's bound (BlockWindingPass) settles a corner's sign,
+// its value is that estimate (the sign exact, the size within the bound); else the cone is summed.
 struct CornerColumnPass {
   SparseGridView view;
   ModelView model;
   WindingOptions winding;
   float level;
+  const BlockWinding* block_winding;  // per slot, or nullptr
   float* corner_value;
 
   GWNRT_HD void operator()(uint64_t item) const {
@@ -93,16 +222,14 @@ struct CornerColumnPass {
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const uint32_t needed_from = view.needed_from[slot];
     const bool exact = resolve_winding_method(model, winding.method) == WindingMethod::kCrossing;
-    int axis = 2;
-    float sign = 1.0f;
-    if (exact) {
-      const vec3 centre =
-          view.grid.corner_position({b.x * kBlockCells + kBlockCells / 2, b.y * kBlockCells + kBlockCells / 2,
-                                     b.z * kBlockCells + kBlockCells / 2});
-      const RayFrame exit = shortest_exit_axis_ray(model.bounds, centre);
-      axis = exit.kz;
-      sign = exit.sz > 0.0f ? 1.0f : -1.0f;
-    }
+    const BlockWinding* bound = exact && block_winding && block_winding[slot].any() ? block_winding + slot : nullptr;
+    BlockRay ray{vec3(0.0f), 2, 1.0f};
+    if (bound)
+      ray = {vec3(0.0f), bound->axis, bound->sign};
+    else if (exact)
+      ray = block_ray(view.grid, model.bounds, b);
+    const int axis = ray.axis;
+    const float sign = ray.sign;
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     GridCoord local[kBlockCells];
     bool needed[kBlockCells];
@@ -122,12 +249,23 @@ struct CornerColumnPass {
     const auto position = [&](const GridCoord& l) {
       return view.grid.corner_position({b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z});
     };
-    if (all) {
+    if (all || bound) {
       vec3 points[kBlockCells];
-      float w[kBlockCells];
+      int jumps[kBlockCells];
       for (int k = 0; k < kBlockCells; ++k) points[k] = position(local[k]);
-      corner_winding_values(model, points, axis, sign, level, w);
-      for (int k = 0; k < kBlockCells; ++k) out[local_index(local[k])] = w[k] - level;
+      mesh_jumps_along_axis(model, points, axis, sign, jumps);
+      for (int k = 0; k < kBlockCells; ++k) {
+        float f = __builtin_nanf("");
+        if (needed[k]) {
+          if (model.cone.triangle_count == 0) {  // no cone: the crossings alone, exact
+            f = -float(jumps[k]) - level;
+          } else {
+            if (bound) f = BlockWindingPass::estimate(view.grid, b, *bound, local[k], points[k], jumps[k], level);
+            if (!(f == f)) f = corner_winding_value(model, points[k], axis, sign, jumps[k], level) - level;
+          }
+        }
+        out[local_index(local[k])] = f;
+      }
       return;
     }
     for (int k = 0; k < kBlockCells; ++k)

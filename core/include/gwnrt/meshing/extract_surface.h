@@ -57,6 +57,11 @@ struct MeshingOptions {
   bool soup = false;  // three vertices of its own per triangle
   uint32_t attributes = 0;
   WindingOptions winding;  // how w is evaluated at the corners (auto: exact where it wins)
+  // With exact w and a boundary, corners far from the level take the sign of a first-order
+  // estimate whose error is bounded (field/box_winding.h) rather than their own evaluation; off:
+  // every corner evaluated (the reference the tests hold it to). The mesh's topology is the same;
+  // smooth Hermite points may move within the root tolerance.
+  bool settle_corners_by_bounds = true;
   // Refused (with what it would need) when the pipeline's arrays would exceed this many bytes.
   uint64_t memory_budget = uint64_t(8) << 30;
   // When given: work items done, and the items known so far (grown as each pass is sized).

@@ -160,6 +160,7 @@ struct SparseGridArrays {
   using Array = typename Backend::template Array<T>;
   Array<uint32_t> slot_of_block, block_of_slot, needed_from;
   Array<float> corner_value;
+  Array<BlockWinding> block_winding;  // per slot, with the exact method and a cone
   Array<uint8_t> edge_mask;
   Array<uint32_t> edge_count, edge_offset;
   Array<uint32_t> cell_parts, cell_count, cell_offset;
@@ -258,7 +259,8 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
   // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
-  const uint64_t per_slot = uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8;
+  const uint64_t per_slot =
+      uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -287,10 +289,18 @@ template <class Backend>
 void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOptions& options,
                       SparseGridArrays<Backend>& g) {
   g.corner_value.resize(g.slots * kBlockItems);
+  const BlockWinding* block_winding = nullptr;
+  if (options.settle_corners_by_bounds && model.cone.triangle_count > 0 &&
+      resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing) {
+    g.block_winding.resize(g.slots);
+    backend.parallel_for(g.slots, BlockWindingPass{g.view, model, options.level, g.block_winding.data()});
+    block_winding = g.block_winding.data();
+  }
   const uint64_t columns = g.slots * kBlockCells * kBlockCells;
   if (options.progress_total) options.progress_total->fetch_add(columns);
-  backend.parallel_for(columns, CornerColumnPass{g.view, model, options.winding, options.level, g.corner_value.data()},
-                       4, options.progress);
+  backend.parallel_for(
+      columns, CornerColumnPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data()}, 4,
+      options.progress);
   g.view.corner_value = g.corner_value.data();
 }
 

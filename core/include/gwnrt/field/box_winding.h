@@ -1,0 +1,201 @@
+// w over a whole box from a few evaluations (docs/design.md §11, corners): the sign of w − w* at
+// many points of a box, settled by first-order estimates and bounds, where the box is far enough
+// from the level. Host-and-device.
+//
+// Along the axis ray from x (fixed axis and direction), w(x) = ŵ(x) − J(x), J(x) the sum of M's
+// jumps ahead of x and ŵ(x) = w_C(x) + the cone's jumps ahead (crossing_winding.h). ŵ jumps only
+// where the ray sweeps across ∂M (a crossing of M that moves from one triangle to its neighbour
+// keeps its jump unless their edge is on ∂M); so where no segment of ∂M lies in the box swept
+// along the ray to M's box, ŵ is continuous on the box, harmonic, with ∇ŵ = ∇w the Biot–Savart
+// field of ∂M: |∇w(y)| <= K = (1/4π) Σ_segments length / distance(y, segment)², and |H_w| <= H
+// likewise with 2/distance³. Hence for x and c in the box, ŵ(x) lies within ½·H·|x − c|² of
+// ŵ(c) + ∇w(c)·(x − c) (and within K·|x − c| of ŵ(c)), and w(x) − w* has the sign of that
+// estimate minus J(x) + w* wherever it clears the bound: one cone traversal for c, M's crossings
+// (shared along columns) for each x.
+#pragma once
+
+#include "gwnrt/field/crossing_winding.h"
+
+namespace gwnrt {
+
+// Bounds on w's derivatives over a box, where ŵ is continuous on it (usable).
+struct BoxFieldBounds {
+  float gradient = 0;  // K: |∇w| <= K on the box
+  float hessian = 0;   // |H_w| <= this on the box (operator norm)
+  bool usable = false;
+};
+
+// ŵ and ∇w at one point of such a box: the centre of a first-order estimate.
+struct TaylorPoint {
+  vec3 gradient{0.0f};
+  float w_hat = 0;
+};
+
+// Work caps: segments tested one by one (a box beside a long stretch of ∂M is left to the
+// corners' own evaluation rather than bounded at great cost), and the traversal stack.
+inline constexpr int kMaxBoxBoundSegments = 256;
+
+// Margin on ŵ(c) (held to 1e-5 by the cone's beta, crossing_winding.h) and on float round-off of
+// the estimate: a point is settled only when its estimate clears the bound by this much.
+inline constexpr float kBoxWindingMargin = 1e-3f;
+
+namespace detail {
+
+GWNRT_HD inline float lane_box_gap2(const WideNode& node, int lane, const Aabb& box) {
+  float d2 = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    const float gap = max_of(max_of(node.lo[a][lane] - box.hi[a], box.lo[a] - node.hi[a][lane]), 0.0f);
+    d2 += gap * gap;
+  }
+  return d2;
+}
+
+GWNRT_HD inline bool lane_meets_box(const WideNode& node, int lane, const Aabb& box) {
+  for (int a = 0; a < 3; ++a)
+    if (node.lo[a][lane] > box.hi[a] || node.hi[a][lane] < box.lo[a]) return false;
+  return true;
+}
+
+GWNRT_HD inline float box_gap2(const vec3& lo, const vec3& hi, const Aabb& box) {
+  float d2 = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    const float gap = max_of(max_of(lo[a] - box.hi[a], box.lo[a] - hi[a]), 0.0f);
+    d2 += gap * gap;
+  }
+  return d2;
+}
+
+}  // namespace detail
+
+// K = (1/4π) Σ length / gap² over ∂M's segments (gap: between the segment's box and `box`) and
+// the Hessian's (1/4π) Σ 2 length / gap³ (the kernel (y − l)/|y − l|³ of ∇w has a derivative of
+// norm 2/|y − l|³), clusters taken whole when their gap is at least their box's diagonal; 0 for
+// a closed mesh. False when a segment's box meets `swept` (which holds `box`) or the caps are
+// reached.
+GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, const Aabb& box, const Aabb& swept,
+                                           float& gradient_bound, float& hessian_bound) {
+  gradient_bound = hessian_bound = 0.0f;
+  if (boundary.segment_count == 0 || boundary.bvh.node_count == 0) return true;
+  if (!boundary.lengths) return false;
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  int segments_tested = 0;
+  double sum = 0.0, sum3 = 0.0;
+  while (sp > 0) {
+    const uint32_t index = stack[--sp];
+    const WideNode& node = boundary.bvh.nodes[index];
+    for (int lane = 0; lane < kBvhWidth; ++lane) {
+      if (node.child[lane] == kEmptyLane) continue;
+      const float gap2 = detail::lane_box_gap2(node, lane, box);
+      if (!detail::lane_meets_box(node, lane, swept)) {
+        float diagonal2 = 0.0f;
+        for (int a = 0; a < 3; ++a) {
+          const float e = node.hi[a][lane] - node.lo[a][lane];
+          diagonal2 += e * e;
+        }
+        if (gap2 >= diagonal2 && gap2 > 0.0f) {
+          const double term = double(boundary.lengths[index].length[lane]) / double(gap2);
+          sum += term;
+          sum3 += term / sqrt(double(gap2));
+          continue;
+        }
+      }
+      if (node.count[lane] == 0) {
+        if (sp == kTraversalStackSize) return false;
+        stack[sp++] = node.child[lane];
+        continue;
+      }
+      for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s) {
+        if (++segments_tested > kMaxBoxBoundSegments) return false;
+        const vec3 a = boundary.endpoints[2 * s], b = boundary.endpoints[2 * s + 1];
+        const vec3 lo = glm::min(a, b), hi = glm::max(a, b);
+        if (detail::box_gap2(lo, hi, swept) == 0.0f) return false;  // ∂M in the swept box
+        const double gap2 = detail::box_gap2(lo, hi, box);
+        const double term = double(glm::length(b - a)) / gap2;
+        sum += term;
+        sum3 += term / sqrt(gap2);
+      }
+    }
+  }
+  // Rounded up past the float sums' error.
+  gradient_bound = float(sum * (0.25 * kInvPi) * (1.0 + 1e-5));
+  hessian_bound = float(sum3 * (0.5 * kInvPi) * (1.0 + 1e-5));
+  return true;
+}
+
+// The bounds over `box` for rays along (axis, sign): the box swept along that direction to M's
+// box must hold no segment of ∂M.
+GWNRT_HD inline BoxFieldBounds box_field_bounds(const ModelView& m, const Aabb& box, int axis, float sign) {
+  BoxFieldBounds out;
+  Aabb swept = box;
+  if (sign > 0.0f)
+    swept.hi[axis] = max_of(swept.hi[axis], m.bounds.hi[axis]);
+  else
+    swept.lo[axis] = min_of(swept.lo[axis], m.bounds.lo[axis]);
+  out.usable = boundary_field_bounds(m.boundary, box, swept, out.gradient, out.hessian) && is_finite(out.gradient) &&
+               is_finite(out.hessian);
+  return out;
+}
+
+// ŵ and ∇w at x along (axis, sign): one cone traversal at the derivatives' beta. False on the cone.
+GWNRT_HD inline bool taylor_point(const ModelView& m, const vec3& x, int axis, float sign, TaylorPoint& out) {
+  if (m.cone.triangle_count == 0) {  // closed: ŵ = 0, ∇w = 0
+    out = TaylorPoint{};
+    return true;
+  }
+  vec3 direction(0.0f);
+  direction[axis] = sign;
+  const RayFrame frame = make_ray_frame(x, direction);  // the visitor keeps a reference
+  typename detail::ConeCrossingVisitor<true, false>::type cone(m.cone, frame, x, kConeDerivativeBeta, nullptr);
+  cone.traverse();
+  if (cone.on_cone) return false;
+  out.w_hat = detail::crossing_winding(cone, 0);
+  out.gradient = detail::cone_gradient(cone);
+  return is_finite(out.w_hat) && is_finite(out.gradient.x) && is_finite(out.gradient.y) && is_finite(out.gradient.z);
+}
+
+namespace detail {
+
+// How far the first-order estimate from p may be from ŵ at `offset` from p: ½·|H|·r² (Taylor's
+// remainder), ∇w(p)'s own error (held to a relative 1e-4: a tenth of this), and the margin.
+GWNRT_HD inline float taylor_reach(const TaylorPoint& p, const BoxFieldBounds& b, float r) {
+  return 0.5f * b.hessian * r * r + 1e-3f * glm::length(p.gradient) * r +
+         kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
+}
+
+}  // namespace detail
+
+// w − w* at x = p + offset, in the box the bounds hold on, or NaN where they do not settle its
+// sign: `jumps` is J(x). First order, ŵ(p) + ∇w(p)·offset, within taylor_reach; else ŵ(p) alone,
+// within K·|offset|.
+GWNRT_HD inline float taylor_estimate(const TaylorPoint& p, const BoxFieldBounds& b, int jumps, const vec3& offset,
+                                      float level) {
+  const float r = glm::length(offset);
+  const float constant = p.w_hat - float(jumps) - level;
+  const float linear = constant + glm::dot(p.gradient, offset);
+  if (fabsf(linear) > detail::taylor_reach(p, b, r)) return linear;
+  const float margin = kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
+  return fabsf(constant) > b.gradient * r + margin ? constant : __builtin_nanf("");
+}
+
+// Whether the first-order estimate from p may leave some point of `box` unsettled: the range of
+// ŵ(p) + ∇w(p)·(x − p) over the box, widened by the largest reach, holds a level w* + n for some
+// whole n (J is a whole number). `straddles`: the estimate's range itself holds one (S likely
+// passes through the box).
+GWNRT_HD inline bool taylor_may_leave_unsettled(const TaylorPoint& p, const BoxFieldBounds& b, const vec3& centre,
+                                                const Aabb& box, float level, bool& straddles) {
+  float lo = p.w_hat, hi = p.w_hat, r2 = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    const float d0 = box.lo[a] - centre[a], d1 = box.hi[a] - centre[a];
+    lo += min_of(p.gradient[a] * d0, p.gradient[a] * d1);
+    hi += max_of(p.gradient[a] * d0, p.gradient[a] * d1);
+    r2 += max_of(d0 * d0, d1 * d1);
+  }
+  const float reach = detail::taylor_reach(p, b, sqrtf(r2));
+  // A level w* + n in [lo, hi]: floor(hi − w*) >= ceil(lo − w*).
+  straddles = floorf(hi - level) >= ceilf(lo - level);
+  return floorf(hi + reach - level) >= ceilf(lo - reach - level);
+}
+
+}  // namespace gwnrt
