@@ -84,6 +84,10 @@ nlohmann::json report_json(const gwnrt::MeshingStats& stats, const gwnrt::MeshQu
   j["seconds"] = {{"total", mesh_seconds},    {"scout", p.scout},       {"corners", p.corners},
                   {"edges", p.edges},         {"vertices", p.vertices}, {"faces", p.faces},
                   {"smoothing", p.smoothing}, {"output", p.output},     {"report", q.seconds}};
+  j["report_seconds"] = {{"topology", q.seconds_topology},
+                         {"self_intersections", q.seconds_self_intersections},
+                         {"to_surface", d.seconds_to_surface},
+                         {"from_surface", d.seconds_from_surface}};
   j["memory"] = {{"pipeline_bytes", stats.bytes}, {"peak_resident_bytes", peak_memory_bytes()}};
   j["edges"] = {{"crossing", stats.crossing_edges}, {"sheet", stats.sheet_edges},   {"smooth", stats.smooth_edges},
                 {"fallback", stats.fallback_edges}, {"capped", stats.capped_edges}, {"open", stats.open_edges}};

@@ -183,6 +183,15 @@ TEST(EmbreePlugin, MeshOutlivesApplicationReference) {
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
 }
 
+// An STL soup loads as the mesh it describes: its repeated corners one vertex each.
+TEST(EmbreePlugin, LoadsStl) {
+  GWNRTMesh mesh = gwnrtLoadMesh(test::data_path("realworld/motoman_motomini_visual_link_1_s.stl").c_str());
+  ASSERT_NE(mesh, nullptr) << gwnrtGetLastError();
+  EXPECT_EQ(gwnrtGetMeshTriangleCount(mesh), 2462u);
+  EXPECT_EQ(gwnrtGetMeshVertexCount(mesh), 1182u);
+  gwnrtReleaseMesh(mesh);
+}
+
 // The sequence in gwnrt/embree.h's top comment, verbatim: attach, release, commit the scene.
 TEST(EmbreePlugin, HeaderExampleSequenceWorks) {
   Device device;

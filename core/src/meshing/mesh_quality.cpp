@@ -367,6 +367,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
 
   SurfaceDistances result;
   std::mt19937_64 rng(options.seed);
+  const auto t_to = std::chrono::steady_clock::now();
 
   // Output -> S.
   const std::vector<vec3>& pos = mesh.positions;
@@ -393,11 +394,19 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
         samples.push_back(vec3(p));
       }
     }
-    if (options.include_vertices) {
+    if (options.vertex_samples > 0) {
       std::vector<uint8_t> used(pos.size(), 0);
       for (const uvec3& v : mesh.triangles) used[v[0]] = used[v[1]] = used[v[2]] = 1;
+      std::vector<uint32_t> vertices;
       for (size_t i = 0; i < pos.size(); ++i)
-        if (used[i]) samples.push_back(pos[i]);
+        if (used[i]) vertices.push_back(uint32_t(i));
+      if (vertices.size() > options.vertex_samples) {
+        // A partial Fisher-Yates shuffle: vertex_samples distinct vertices, reproducibly.
+        for (size_t i = 0; i < options.vertex_samples; ++i)
+          std::swap(vertices[i], vertices[i + size_t(rng() % (vertices.size() - i))]);
+        vertices.resize(options.vertex_samples);
+      }
+      for (const uint32_t i : vertices) samples.push_back(pos[i]);
     }
   }
   std::vector<float> to_surface(samples.size());
@@ -420,6 +429,8 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
     result.hausdorff_to_surface = std::max(result.hausdorff_to_surface, double(d));
   }
   if (!to_surface.empty()) result.mean_to_surface /= double(to_surface.size());
+  result.seconds_to_surface = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_to).count();
+  const auto t_from = std::chrono::steady_clock::now();
 
   // Points of S: every hit along rays through the model's box.
   const Aabb& bounds = model.bounds();
@@ -517,6 +528,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   if (!surface_points.empty()) result.mean_from_surface /= double(surface_points.size());
   if (normals > 0) result.normal_deviation_mean_deg /= double(normals);
   result.chamfer = 0.5 * (result.mean_to_surface + result.mean_from_surface);
+  result.seconds_from_surface = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_from).count();
   out = result;
   return Status::Ok();
 }
@@ -541,10 +553,16 @@ Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const
                            MeshQualityReport& out, bool weld_equal_positions) {
   out = MeshQualityReport{};
   const auto t0 = std::chrono::steady_clock::now();
+  const auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   if (Status s = mesh_topology(mesh, out.topology, weld_equal_positions); !s.ok()) return s;
+  out.seconds_topology = since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
   if (Status s = count_self_intersections(mesh, out.self_intersections); !s.ok()) return s;
+  out.seconds_self_intersections = since(t1);
   if (Status s = surface_distances(model, mesh, options, out.distances); !s.ok()) return s;
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds = since(t0);
   return Status::Ok();
 }
 
