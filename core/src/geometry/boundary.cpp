@@ -255,27 +255,14 @@ std::vector<ConeSegment> cone_segments(const TriangleTree& cone) {
 }
 
 std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone) {
-  std::vector<WideNodeLength> lengths(cone.bvh.nodes.size(), WideNodeLength{});
-  // Bottom-up, in double (a long curve of short segments would lose its tail in float), and
-  // rounded up so that the float total still bounds the true one.
-  auto node_length = [&](auto& self, uint32_t index) -> double {
-    const WideNode& node = cone.bvh.nodes[index];
-    double total = 0;
-    for (int l = 0; l < kBvhWidth; ++l) {
-      double lane = 0;
-      if (node.count[l] > 0) {
-        for (uint32_t t = node.child[l]; t < node.child[l] + node.count[l]; ++t)
-          lane += glm::length(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
-      } else if (node.child[l] != kEmptyLane) {
-        lane = self(self, node.child[l]);
-      }
-      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinity) : 0.0f;
-      total += lane;
-    }
-    return total;
-  };
-  if (!cone.bvh.nodes.empty()) node_length(node_length, 0);
-  return lengths;
+  // A cone triangle's edge 1 -> 2 is its segment of ∂M.
+  return lane_lengths(
+      cone.bvh,
+      [](const void* c, uint32_t t) {
+        const vec3* v = static_cast<const vec3*>(c);
+        return glm::length(dvec3(v[3 * t + 2]) - dvec3(v[3 * t + 1]));
+      },
+      cone.vertices.data());
 }
 
 }  // namespace gwnrt

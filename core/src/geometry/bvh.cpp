@@ -2,6 +2,7 @@
 // (depth <= log2 n), which is what multipole evaluation wants: compact clusters at every level.
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -151,6 +152,28 @@ Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_
     return {StatusCode::kInternal, "BVH build: deeper than kMaxBvhDepth (" + std::to_string(kMaxBvhDepth) + ")"};
   out = std::move(bvh);
   return Status::Ok();
+}
+
+std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)(const void* context, uint32_t i),
+                                         const void* context) {
+  std::vector<WideNodeLength> lengths(bvh.nodes.size(), WideNodeLength{});
+  auto node_length = [&](auto& self, uint32_t index) -> double {
+    const WideNode& node = bvh.nodes[index];
+    double total = 0;
+    for (int l = 0; l < kBvhWidth; ++l) {
+      double lane = 0;
+      if (node.count[l] > 0) {
+        for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) lane += length_of(context, i);
+      } else if (node.child[l] != kEmptyLane) {
+        lane = self(self, node.child[l]);
+      }
+      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinity) : 0.0f;
+      total += lane;
+    }
+    return total;
+  };
+  if (!bvh.nodes.empty()) node_length(node_length, 0);
+  return lengths;
 }
 
 }  // namespace gwnrt

@@ -125,4 +125,10 @@ struct WideBvh {
 
 Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out);
 
+// Per node, the total of length_of(primitive in leaf order) below each lane: bottom-up in double
+// (a long curve of short segments would lose its tail in float), each lane's float rounded up so
+// that it still bounds the true total (the bounds it enters must not shrink).
+std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)(const void* context, uint32_t i),
+                                         const void* context);
+
 }  // namespace gwnrt
