@@ -66,8 +66,9 @@ BoundCounts check_bounds_on(const std::string& name, int box_count) {
       const double w_hat = w + jumps_at(m, x, axis, sign);
       const double r = glm::length(dvec3(x) - dvec3(at));
       const double linear = p.w_hat + glm::dot(dvec3(p.gradient), dvec3(x) - dvec3(at));
-      // Taylor's remainder and the Lipschitz bound, with the evaluation's 1e-4.
-      EXPECT_LE(std::abs(w_hat - linear), 0.5 * b.hessian * r * r + 1e-3 * glm::length(p.gradient) * r + 1e-4)
+      // Taylor's remainder and the Lipschitz bound, with the centre's gradient error and 1e-4.
+      EXPECT_LE(std::abs(w_hat - linear),
+                0.5 * b.hessian * r * r + kTaylorGradientError * glm::length(p.gradient) * r + 1e-4)
           << "box " << i << " point " << k;
       EXPECT_LE(std::abs(w_hat - p.w_hat), b.gradient * r + 1e-4) << "box " << i << " point " << k;
       EXPECT_LE(glm::length(reference_gradient(ref, dvec3(x))), b.gradient * (1 + 1e-4)) << "box " << i;

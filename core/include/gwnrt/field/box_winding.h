@@ -39,6 +39,13 @@ inline constexpr int kMaxBoxBoundSegments = 256;
 // the estimate: a point is settled only when its estimate clears the bound by this much.
 inline constexpr float kBoxWindingMargin = 1e-3f;
 
+// The centres' ∇w comes from the cone's clusters expanded beyond this many radii, and is allowed
+// this relative error: the derivatives' own beta (16, a relative 1e-4) made the centres a third of
+// the mesher's time on a scan; at 8 the largest error seen was 0.6% (near the abb STL's 82 loops,
+// 20,000 points; 5% at beta 5), so 2% keeps a margin of three (docs/performance.md).
+inline constexpr float kTaylorPointBeta = 8.0f;
+inline constexpr float kTaylorGradientError = 2e-2f;
+
 namespace detail {
 
 GWNRT_HD inline float lane_box_gap2(const WideNode& node, int lane, const Aabb& box) {
@@ -147,7 +154,7 @@ GWNRT_HD inline bool taylor_point(const ModelView& m, const vec3& x, int axis, f
   vec3 direction(0.0f);
   direction[axis] = sign;
   const RayFrame frame = make_ray_frame(x, direction);  // the visitor keeps a reference
-  typename detail::ConeCrossingVisitor<true, false>::type cone(m.cone, frame, x, kConeDerivativeBeta, nullptr);
+  typename detail::ConeCrossingVisitor<true, false>::type cone(m.cone, frame, x, kTaylorPointBeta, nullptr);
   cone.traverse();
   if (cone.on_cone) return false;
   out.w_hat = detail::crossing_winding(cone, 0);
@@ -158,9 +165,9 @@ GWNRT_HD inline bool taylor_point(const ModelView& m, const vec3& x, int axis, f
 namespace detail {
 
 // How far the first-order estimate from p may be from ŵ at `offset` from p: ½·|H|·r² (Taylor's
-// remainder), ∇w(p)'s own error (held to a relative 1e-4: a tenth of this), and the margin.
+// remainder), ∇w(p)'s own error (kTaylorGradientError), and the margin.
 GWNRT_HD inline float taylor_reach(const TaylorPoint& p, const BoxFieldBounds& b, float r) {
-  return 0.5f * b.hessian * r * r + 1e-3f * glm::length(p.gradient) * r +
+  return 0.5f * b.hessian * r * r + kTaylorGradientError * glm::length(p.gradient) * r +
          kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
 }
 
@@ -196,6 +203,21 @@ GWNRT_HD inline bool taylor_may_leave_unsettled(const TaylorPoint& p, const BoxF
   // A level w* + n in [lo, hi]: floor(hi − w*) >= ceil(lo − w*).
   straddles = floorf(hi - level) >= ceilf(lo - level);
   return floorf(hi + reach - level) >= ceilf(lo - reach - level);
+}
+
+// Whether ŵ(p) + ... settles w − w* to one sign, `positive` or not, on the whole segment [a, b]
+// (with J constant on it): the first-order estimate minus its reach (linear minus convex: concave)
+// at both ends, or the zeroth-order one at both ends; the one criterion at both ends, so that
+// concavity carries it to every point between.
+GWNRT_HD inline bool taylor_settles_segment(const TaylorPoint& p, const BoxFieldBounds& b, int jumps,
+                                            const vec3& a_offset, const vec3& b_offset, float level, bool positive) {
+  const float s = positive ? 1.0f : -1.0f;
+  const float constant = p.w_hat - float(jumps) - level;
+  const float ra = glm::length(a_offset), rb = glm::length(b_offset);
+  const float la = constant + glm::dot(p.gradient, a_offset), lb = constant + glm::dot(p.gradient, b_offset);
+  if (s * la > detail::taylor_reach(p, b, ra) && s * lb > detail::taylor_reach(p, b, rb)) return true;
+  const float margin = kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
+  return s * constant > b.gradient * max_of(ra, rb) + margin;
 }
 
 }  // namespace gwnrt

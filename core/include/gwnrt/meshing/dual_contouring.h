@@ -315,6 +315,7 @@ struct HermitePass {
   ModelView model;
   WindingOptions winding;
   float level;
+  const BlockWinding* block_winding;  // per slot, or nullptr
   const uint64_t* edges;
   HermitePoint* hermite;
 
@@ -324,8 +325,45 @@ struct HermitePass {
     const GridCoord c = view.coord_of_item(corner);
     GridCoord n = c;
     ++n[axis];
-    hermite[i] = edge_hermite(model, winding, level, view.grid.corner_position(c), axis, view.grid.cell,
-                              view.corner_value[corner], view.corner_value_at(n));
+    const vec3 p0 = view.grid.corner_position(c);
+    EdgeBound bound;
+    const bool bounded = block_winding && edge_bound(corner, axis, p0, bound);
+    hermite[i] = edge_hermite(model, winding, level, p0, axis, view.grid.cell, view.corner_value[corner],
+                              view.corner_value_at(n), bounded ? &bound : nullptr);
+  }
+
+  // The finest centre of the corner's block whose bounds' box holds the edge (both its ends), and
+  // J at the corner along the block's ray.
+  GWNRT_HD bool edge_bound(uint64_t corner, int axis, const vec3& p0, EdgeBound& out) const {
+    const uint32_t slot = uint32_t(corner / kBlockItems);
+    const BlockWinding& w = block_winding[slot];
+    if (!w.any()) return false;
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+    const GridCoord l = local_coord(uint32_t(corner % kBlockItems));
+    const int fine = l.x / 2 + 4 * (l.y / 2) + 16 * (l.z / 2), mid = l.x / 4 + 2 * (l.y / 4) + 4 * (l.z / 4);
+    const bool in_mid = l[axis] % 4 != 3, in_block = l[axis] != kBlockCells - 1;
+    if (in_mid && ((w.fine >> fine) & 1u)) {
+      out.point = w.point[9 + fine];
+      out.centre = corner_box(view.grid, b, {l.x & ~1, l.y & ~1, l.z & ~1}, 2).centre();
+      out.bounds = w.bounds[1 + mid];
+    } else if (in_mid && ((w.mid >> mid) & 1u)) {
+      out.point = w.point[1 + mid];
+      out.centre = corner_box(view.grid, b, {l.x & ~3, l.y & ~3, l.z & ~3}, 4).centre();
+      out.bounds = w.bounds[1 + mid];
+    } else if (in_block && w.block) {
+      out.point = w.point[0];
+      out.centre = corner_box(view.grid, b, {0, 0, 0}, kBlockCells).centre();
+      out.bounds = w.bounds[0];
+    } else {
+      return false;
+    }
+    const vec3 points[1] = {p0};
+    int jumps[1];
+    mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
+    out.jumps = jumps[0];
+    out.axis = w.axis;
+    out.sign = w.sign;
+    return true;
   }
 };
 

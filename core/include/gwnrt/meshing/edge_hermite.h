@@ -3,6 +3,7 @@
 // Host-and-device.
 #pragma once
 
+#include "gwnrt/field/box_winding.h"
 #include "gwnrt/field/evaluate_winding.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/ray.h"
@@ -75,19 +76,41 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
 
 }  // namespace detail
 
+// A first-order estimate of w whose bounds hold on a box that holds the edge (field/box_winding.h):
+// its centre, the ray its J is taken along, and J at the edge's start.
+struct EdgeBound {
+  TaylorPoint point;
+  BoxFieldBounds bounds;
+  vec3 centre{0.0f};
+  int axis = 2;  // the ray J is taken along
+  float sign = 1.0f;
+  int jumps = 0;
+};
+
 // The point where S crosses the edge from p0 to p0 + h·e_axis, f0 = w(p0) − w* and f1 = w(end)
 // − w* of different signs (inside: f > 0). Along the edge w is continuous except at crossings
 // of M, where it jumps by the crossing's jump; walking from p0, the first place where f changes
 // sign is either within an interval between crossings (a smooth piece: a bracketed root) or at a
 // crossing (a sheet: the exact ray–triangle point and the triangle's normal, turned outward).
 // Off a cone (a closed mesh) and with exact w, w is constant between crossings and no w is
-// evaluated at all.
+// evaluated at all. With a bound, an interval it settles to one sign, and the side after its
+// crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
+// continuous).
 GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
-                                          const vec3& p0, int axis, float h, float f0, float f1) {
+                                          const vec3& p0, int axis, float h, float f0, float f1,
+                                          const EdgeBound* bound = nullptr) {
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
-  const auto value = [&](float t) { return evaluate_winding(m, p0 + t * direction, winding).w - level; };
+  int jumps = bound ? bound->jumps : 0;
+  // With a bound, J is known on every interval between crossings (it falls by each crossing's
+  // jump): w there is the cone's traversal alone, no walk through M.
+  const auto value = [&](float t) {
+    const vec3 x = p0 + t * direction;
+    return (bound ? winding_from_mesh_jumps(m, x, bound->axis, bound->sign, jumps)
+                  : evaluate_winding(m, x, winding).w) -
+           level;
+  };
   const bool piecewise_constant =
       m.cone.triangle_count == 0 && resolve_winding_method(m, winding.method) == WindingMethod::kCrossing;
   const float offset = kCrossingOffset * h;
@@ -98,8 +121,19 @@ GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptio
     CrossingHit hit;
     const bool found = next_crossing(m.triangles.bvh, m.triangles.vertices, frame, t_start, index_after, h, hit);
     const float t_end = found ? hit.t : h;
-    float f_end = f1;
-    if (found) f_end = piecewise_constant || t_end - t_start < 2.0f * offset ? f_start : value(t_end - offset);
+    float f_end = f1, f_after_settled = __builtin_nanf("");
+    if (found) {
+      const bool constant = piecewise_constant || t_end - t_start < 2.0f * offset;
+      if (!constant && bound &&
+          taylor_settles_segment(bound->point, bound->bounds, jumps, p0 + t_start * direction - bound->centre,
+                                 p0 + (t_end - offset) * direction - bound->centre, level, f_start > 0.0f))
+        f_after_settled = taylor_estimate(bound->point, bound->bounds, jumps - hit.jump,
+                                          p0 + t_end * direction - bound->centre, level);
+      if (f_after_settled == f_after_settled)
+        f_end = f_start;  // its sign, which is all that is read of it
+      else
+        f_end = constant ? f_start : value(t_end - offset);
+    }
     if ((f_start > 0.0f) != (f_end > 0.0f)) {
       const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
       return detail::smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value);
@@ -108,7 +142,8 @@ GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptio
       capped = false;
       break;
     }
-    const float f_after = f_end + float(hit.jump);
+    const float f_after = f_after_settled == f_after_settled ? f_after_settled : f_end + float(hit.jump);
+    jumps -= hit.jump;
     if ((f_end > 0.0f) != (f_after > 0.0f)) {
       HermitePoint out;
       out.kind = HermiteKind::kSheet;

@@ -326,9 +326,11 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   backend.parallel_for(items, EdgeListPass{g.view, e.edges.data()});
   e.hermite.resize(e.total);
   if (options.progress_total) options.progress_total->fetch_add(e.total);
-  backend.parallel_for(e.total,
-                       HermitePass{g.view, model, options.winding, options.level, e.edges.data(), e.hermite.data()}, 16,
-                       options.progress);
+  backend.parallel_for(
+      e.total,
+      HermitePass{g.view, model, options.winding, options.level,
+                  g.block_winding.size() ? g.block_winding.data() : nullptr, e.edges.data(), e.hermite.data()},
+      16, options.progress);
   stats.crossing_edges = e.total;
   typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
   tally.resize(kHermiteTallies);
