@@ -65,6 +65,9 @@ struct Row {
   uint64_t self_intersections = 0;
   SurfaceDistances distances;
   double ratio_to_openvdb = NAN;  // seconds / OpenVDB's seconds at the same resolution
+  // Seconds per output triangle over the first mesh's (gwnrt DC at the same resolution): what
+  // the mess of an input costs beyond the surface it gives.
+  double ratio_per_triangle = NAN;
   bool ok() const { return outcome == Outcome::kOk; }
 };
 
@@ -228,9 +231,9 @@ const Row* find_row(const std::vector<Row>& rows, const std::string& method, uin
 std::string count_text(uint64_t n) { return std::to_string(n); }
 
 void print_table(const MeshSummary& m) {
-  std::printf("\n%-8s %5s %9s %7s %9s %6s %6s %6s %6s %10s %10s %10s %10s %7s %7s %7s\n", "method", "res", "seconds",
-              "x vdb", "tris", "closed", "bound", "nonman", "selfx", "cell", "chamfer", "H out>S", "H S>out", "ch/h",
-              "Ho/h", "Hs/h");
+  std::printf("\n%-8s %5s %9s %7s %7s %9s %6s %6s %6s %6s %10s %10s %10s %10s %7s %7s %7s\n", "method", "res",
+              "seconds", "x vdb", "x 1st/t", "tris", "closed", "bound", "nonman", "selfx", "cell", "chamfer", "H out>S",
+              "H S>out", "ch/h", "Ho/h", "Hs/h");
   for (const Row& r : m.rows) {
     if (!r.ok()) {
       std::printf("%-8s %5u %9s   %s: %s\n", r.method.c_str(), r.resolution, "n/a",
@@ -241,8 +244,11 @@ void print_table(const MeshSummary& m) {
     const SurfaceDistances& d = r.distances;
     char ratio[32] = "";
     if (!std::isnan(r.ratio_to_openvdb)) std::snprintf(ratio, sizeof ratio, "%.3f", r.ratio_to_openvdb);
-    std::printf("%-8s %5u %9.3f %7s %9llu %6s %6llu %6llu %6s %10.4g %10.4g %10.4g %10.4g %7.3f %7.3f %7.3f\n",
-                r.method.c_str(), r.resolution, r.seconds, ratio, (unsigned long long)r.triangles,
+    char per_triangle[32] = "";
+    if (!std::isnan(r.ratio_per_triangle))
+      std::snprintf(per_triangle, sizeof per_triangle, "%.2f", r.ratio_per_triangle);
+    std::printf("%-8s %5u %9.3f %7s %7s %9llu %6s %6llu %6llu %6s %10.4g %10.4g %10.4g %10.4g %7.3f %7.3f %7.3f\n",
+                r.method.c_str(), r.resolution, r.seconds, ratio, per_triangle, (unsigned long long)r.triangles,
                 r.topology.closed_manifold() ? "yes" : "no", (unsigned long long)r.topology.boundary_edges,
                 (unsigned long long)r.topology.non_manifold_edges,
                 r.self_checked ? count_text(r.self_intersections).c_str() : "-", h, d.chamfer, d.hausdorff_to_surface,
@@ -322,6 +328,7 @@ nlohmann::json row_json(const std::string& mesh, const Row& r) {
       {"hausdorff_from_surface", ok ? nlohmann::json(r.distances.hausdorff_from_surface) : nlohmann::json()},
       {"cell_size", number_or_null(r.cell_size)},
       {"ratio_to_openvdb", number_or_null(r.ratio_to_openvdb)},
+      {"per_triangle_over_first_mesh", number_or_null(r.ratio_per_triangle)},
       {"volume", ok ? number_or_null(r.volume) : nlohmann::json()}};
   if (!r.message.empty()) j["message"] = r.message;
   if (r.method == "OpenVDB" && ok) {
@@ -349,8 +356,8 @@ int main(int argc, char** argv) try {
   bool no_self = false;
   std::string json_path;
   app.add_option("meshes", meshes,
-                 std::string("OBJ or PLY meshes (default: bunny.obj and bunny_holes.obj from data/, and ") + kDragon +
-                     " when it exists)");
+                 std::string("OBJ, PLY or STL meshes (default: bunny.obj and bunny_holes.obj from data/, and ") +
+                     kDragon + " when it exists)");
   app.add_option("--resolutions", resolutions, "cells along the longest side of S's box, comma-separated")
       ->delimiter(',')
       ->check(CLI::Range(1u, 1u << 16))
@@ -360,6 +367,10 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(1u, 1u << 30))
       ->capture_default_str();
   app.add_flag("--no-self-intersections", no_self, "skip the self-intersection count (slow on big outputs)");
+  bool real = false;
+  app.add_flag("--real", real,
+               "after the meshes, the real ones: data/realworld, and ../shared/meshes/realworld's larger ones when "
+               "present");
   app.add_option("--json", json_path, "also write every row and the model build times to this JSON file");
   if (const auto status = apps::parse_command_line(app, argc, argv)) return *status;
   settings.self_intersections = !no_self;
@@ -385,6 +396,16 @@ int main(int argc, char** argv) try {
           "../shared/meshes/dragon_vrip_res2.ply.gz > %s`)\n",
           kDragon, kDragon);
   }
+  if (real) {
+    // A scan with holes, STL soups of CAD parts, an assembly, an inside-out shell, seams, colours.
+    for (const char* name : {"birdBath_ggg_photogrammetry.obj", "kuka_kr10r1100sixx_visual_base_link.stl",
+                             "kuka_kr150r3100_2_visual_base_link.stl", "motoman_motomini_visual_link_1_s.stl",
+                             "spot_triangulated.obj", "dolphins_colored.ply"})
+      meshes.push_back(std::string(GWNRT_DATA_DIR) + "/realworld/" + name);
+    const std::string shared =
+        std::string(GWNRT_DATA_DIR) + "/../../shared/meshes/realworld/abb_irb6640_visual_link_3.stl";
+    if (std::filesystem::exists(shared)) meshes.push_back(shared);
+  }
   if (const std::string bad = apps::first_bad_input_file(meshes); !bad.empty()) return apps::fail(kProgram, bad);
 
   const apps::ThreadLimit limit(threads);
@@ -400,7 +421,8 @@ int main(int argc, char** argv) try {
   std::printf("(built without OpenVDB: no OpenVDB rows; install libopenvdb-dev and libboost-dev and rebuild)\n");
 #endif
   std::printf(
-      "columns: x vdb = seconds / OpenVDB's; closed = closed manifold; bound, nonman = boundary and "
+      "columns: x vdb = seconds / OpenVDB's; x 1st/t = seconds per triangle / the first mesh's (DC); closed = closed "
+      "manifold; bound, nonman = boundary and "
       "non-manifold edges; selfx = self-intersecting pairs; H out>S, H S>out = Hausdorff distances; "
       "/h = in cells\n");
 
@@ -443,6 +465,9 @@ int main(int argc, char** argv) try {
       if (r.outcome == Outcome::kError) failed = true;
       const Row* vdb = find_row(m.rows, "OpenVDB", r.resolution);
       if (r.ok() && vdb && vdb->seconds > 0) r.ratio_to_openvdb = r.seconds / vdb->seconds;
+      const Row* first = find_row((summaries.empty() ? m : summaries.front()).rows, "gwnrt DC", r.resolution);
+      if (r.ok() && r.triangles > 0 && first && first->ok() && first->triangles > 0 && first->seconds > 0)
+        r.ratio_per_triangle = (r.seconds / double(r.triangles)) / (first->seconds / double(first->triangles));
     }
     print_table(m);
     for (const DoublingRatio& d : doubling_ratios(m, resolutions))
