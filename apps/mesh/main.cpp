@@ -163,7 +163,8 @@ int main(int argc, char** argv) {
   app.add_flag("--report", report,
                "Print a quality report: topology, self-intersections, distances to S, time per pass, memory");
   app.add_option("--report-json", report_json_path, "Write the quality report as JSON to this file");
-  app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
+  app.add_flag("-v,--verbose", verbose,
+               "Print the summary even when stderr is not a terminal, and what welding by position changed");
   if (const auto status = gwnrt::apps::parse_command_line(app, argc, argv)) return *status;
   const bool chatty = verbose || ::isatty(2) == 1;
 
@@ -189,6 +190,7 @@ int main(int argc, char** argv) {
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
   load_options.weld_tolerance = weld_tolerance;
+  load_options.summarize_weld = verbose;
   if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
     return fail(kProgram, s.message());
   if (chatty)
@@ -199,7 +201,7 @@ int main(int argc, char** argv) {
   if (Status a = gwnrt::check_attributes(model.mesh(), options.attributes); !a.ok())
     return fail(kProgram, mesh_path + ": " + a.message());
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, loaded.report);
-  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
+  if (verbose) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
   if (!loaded.report.attributes_dropped.empty())
     std::fprintf(stderr, "%s: %s: note: %s\n", kProgram, mesh_path.c_str(), loaded.report.attributes_dropped.c_str());
 

@@ -277,6 +277,7 @@ int main(int argc, char** argv) {
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
   load_options.weld_tolerance = weld_tolerance;
+  load_options.summarize_weld = verbose;
   if (gwnrt::Status s = gwnrt::apps::load_model(mesh_path, model, loaded, build_options, load_options); !s.ok())
     return fail(kProgram, s.message());
   const auto t_parts = std::chrono::steady_clock::now();
@@ -284,7 +285,7 @@ int main(int argc, char** argv) {
     return fail(kProgram, mesh_path + ": " + s.message());
   const gwnrt::MeshLoadReport& report = loaded.report;
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, report);
-  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, report);
+  if (verbose) gwnrt::apps::print_weld_summary(kProgram, mesh_path, report);
   const double load_seconds = loaded.load_seconds;
   const double build_seconds = loaded.build_seconds + gwnrt::apps::seconds_since(t_parts);
 

@@ -122,7 +122,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::positive_number());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
-  app.add_flag("-v,--verbose", verbose, "Print the summary even when stderr is not a terminal");
+  app.add_flag("-v,--verbose", verbose,
+               "Print the summary even when stderr is not a terminal, and what welding by position changed");
   if (const auto status = gwnrt::apps::parse_command_line(app, argc, argv)) return *status;
 
   gwnrt::apps::set_trace_surface(mode, level, options);
@@ -155,6 +156,7 @@ int main(int argc, char** argv) {
   gwnrt::MeshLoadOptions load_options;
   load_options.recentre = true;
   load_options.weld_tolerance = weld_tolerance;
+  load_options.summarize_weld = verbose;
   if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
     return fail(kProgram, s.message());
   const gwnrt::dvec3 origin = loaded.report.origin;
@@ -165,7 +167,7 @@ int main(int argc, char** argv) {
   }
   std::string().swap(rays_text);
   gwnrt::apps::print_load_warnings(kProgram, mesh_path, loaded.report);
-  if (chatty) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
+  if (verbose) gwnrt::apps::print_weld_summary(kProgram, mesh_path, loaded.report);
   gwnrt::apps::warn_if_level_out_of_reach(kProgram, model.view(), options);
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s; loaded and built in %.3f s\n", kProgram,

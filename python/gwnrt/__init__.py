@@ -170,7 +170,11 @@ class Model:
         vertices_used and positions_used (after welding bit-identical positions),
         boundary_edges_by_index and boundary_edges (after welding: what the model uses),
         boundary_loops, tolerance_welded and degenerate_triangles. None for a model from arrays."""
-        return None if self._load_report is None else dict(self._load_report)
+        if self._load_report is None:
+            return None
+        if "positions_used" not in self._load_report:  # computed on first need: sorts of the whole mesh
+            self._load_report.update(self._native.weld_summary())
+        return dict(self._load_report)
 
     # -- the mesh --------------------------------------------------------------------------------
     @property

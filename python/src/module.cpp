@@ -183,21 +183,28 @@ void bind_model(py::module_& m) {
             if (!report.attributes_dropped.empty())
               notes += (notes.empty() ? "" : "; ") + std::string("dropped: ") + report.attributes_dropped;
             const std::array<double, 3> origin = {report.origin.x, report.origin.y, report.origin.z};
-            py::dict weld;
-            weld["format"] = report.format;
-            weld["file_vertices"] = report.file_vertices;
-            weld["vertices_used"] = report.weld.vertices_used;
-            weld["positions_used"] = report.weld.positions_used;
-            weld["boundary_edges_by_index"] = report.weld.boundary_by_index;
-            weld["boundary_edges"] = report.weld.boundary_by_position;
-            weld["boundary_loops"] = report.weld.boundary_loops;
-            weld["tolerance_welded"] = report.tolerance_welded;
-            weld["degenerate_triangles"] = report.degenerate_triangles;
-            return py::make_tuple(build_model(std::move(mesh), options, threads), notes, origin, weld);
+            py::dict loaded;
+            loaded["format"] = report.format;
+            loaded["file_vertices"] = report.file_vertices;
+            loaded["tolerance_welded"] = report.tolerance_welded;
+            loaded["degenerate_triangles"] = report.degenerate_triangles;
+            return py::make_tuple(build_model(std::move(mesh), options, threads), notes, origin, loaded);
           },
           py::arg("path"), py::kw_only(), py::arg("classify_sheets") = true, py::arg("level") = 0.5f,
           py::arg("sheet_method") = "auto", py::arg("threads") = py::none(), py::arg("recentre") = false,
           py::arg("weld_tolerance") = 0.0)
+      .def("weld_summary",
+           [](const PythonModel& p) {
+             // On first need (gwnrt.Model.load_report): on a large mesh it costs more than parsing.
+             const WeldSummary w = run_released(std::nullopt, [&] { return summarize_weld(p.model().mesh()); });
+             py::dict d;
+             d["vertices_used"] = w.vertices_used;
+             d["positions_used"] = w.positions_used;
+             d["boundary_edges_by_index"] = w.boundary_by_index;
+             d["boundary_edges"] = w.boundary_by_position;
+             d["boundary_loops"] = w.boundary_loops;
+             return d;
+           })
       .def_property_readonly("vertex_count", [](const PythonModel& p) { return p.model().mesh().positions.size(); })
       .def_property_readonly("triangle_count", [](const PythonModel& p) { return p.model().mesh().triangles.size(); })
       .def_property_readonly("vertices", [](const PythonModel& p) { return vec3_copy(p.model().mesh().positions); })

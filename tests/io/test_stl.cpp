@@ -92,7 +92,7 @@ size_t distinct_positions(const std::vector<std::array<vec3, 3>>& facets) {
 class Stl : public TempFiles {
  protected:
   Status load(const std::string& name, const std::string& bytes, Mesh& m, MeshLoadReport* r = nullptr) {
-    return load_mesh(write(name, bytes), m, r);
+    return load_mesh(write(name, bytes), m, r, MeshLoadOptions{.summarize_weld = true});
   }
   void expect_error(const std::string& name, const std::string& bytes, const std::vector<std::string>& parts) {
     Mesh m;
@@ -359,11 +359,12 @@ TEST(Weld, ToleranceClosesTheCracksOfARealStl) {
   Mesh m;
   MeshLoadReport exact, tolerant;
   const std::string path = data_path("realworld/kuka_kr10r1100sixx_visual_base_link.stl");
-  ASSERT_TRUE(load_mesh(path, m, &exact).ok());
+  ASSERT_TRUE(load_mesh(path, m, &exact, MeshLoadOptions{.summarize_weld = true}).ok());
   EXPECT_EQ(exact.weld.boundary_by_position, 182u);
   EXPECT_EQ(exact.tolerance_welded, 0u);
   MeshLoadOptions o;
   o.weld_tolerance = 1e-6;
+  o.summarize_weld = true;
   Mesh welded;
   ASSERT_TRUE(load_mesh(path, welded, &tolerant, o).ok());
   EXPECT_GT(tolerant.tolerance_welded, 0u);

@@ -75,10 +75,14 @@ WeldSummary summarize_weld(const Mesh& mesh) {
     // A position is counted at its first used vertex: the group's first one may be unused.
     s.positions_used += used[v] && (first[v] == v || !used[first[v]]);
   }
-  std::vector<uint32_t> identity(mesh.positions.size());
-  std::iota(identity.begin(), identity.end(), 0u);
-  s.boundary_by_index = boundary_edge_count(mesh, identity);
   s.boundary_by_position = boundary_edge_count(mesh, first);
+  if (s.positions_used == s.vertices_used) {
+    s.boundary_by_index = s.boundary_by_position;  // no two vertices share a position: the same topology
+  } else {
+    std::vector<uint32_t> identity(mesh.positions.size());
+    std::iota(identity.begin(), identity.end(), 0u);
+    s.boundary_by_index = boundary_edge_count(mesh, identity);
+  }
   if (s.boundary_by_position > 0) (void)boundary_loops(extract_boundary(mesh), s.boundary_loops);
   return s;
 }

@@ -100,7 +100,7 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
       }
     rep.tolerance_welded = weld_within(m, options.weld_tolerance * glm::length(hi - lo));
   }
-  rep.weld = summarize_weld(m);
+  if (options.summarize_weld) rep.weld = summarize_weld(m);
   rep.vertex_count = m.positions.size();
   rep.triangle_count = m.triangles.size();
   rep.uv_count = m.uvs.size();
