@@ -15,7 +15,10 @@
 namespace gwnrt {
 
 BoundaryCurve extract_boundary(const Mesh& mesh) {
-  const std::vector<uint32_t> canonical = vertices_by_position(mesh.positions);
+  return extract_boundary(mesh, vertices_by_position(mesh.positions));
+}
+
+BoundaryCurve extract_boundary(const Mesh& mesh, std::span<const uint32_t> canonical) {
   struct HalfEdge {
     uint64_t key;  // (min << 32) | max of the welded endpoints
     int32_t sign;  // +1 when the triangle walks min -> max

@@ -23,30 +23,6 @@ std::array<uint32_t, 3> position_key(const vec3& p) {
   return k;
 }
 
-// Edges of ∂M counted with vertices matched by `vertex` (an index map): half-edges of the
-// non-degenerate triangles summed per edge, each edge counted |sum| times (as extract_boundary does).
-size_t boundary_edge_count(const Mesh& mesh, const std::vector<uint32_t>& vertex) {
-  std::vector<std::pair<uint64_t, int>> half_edges;
-  half_edges.reserve(3 * mesh.triangles.size());
-  for (const uvec3& tri : mesh.triangles) {
-    if (is_degenerate_triangle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]])) continue;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = vertex[tri[k]], b = vertex[tri[(k + 1) % 3]];
-      if (a != b) half_edges.emplace_back((uint64_t(std::min(a, b)) << 32) | std::max(a, b), a < b ? 1 : -1);
-    }
-  }
-  tbb::parallel_sort(half_edges.begin(), half_edges.end());
-  size_t count = 0;
-  for (size_t i = 0; i < half_edges.size();) {
-    int sum = 0;
-    size_t j = i;
-    for (; j < half_edges.size() && half_edges[j].first == half_edges[i].first; ++j) sum += half_edges[j].second;
-    count += size_t(std::abs(sum));
-    i = j;
-  }
-  return count;
-}
-
 }  // namespace
 
 std::vector<uint32_t> vertices_by_position(const std::vector<vec3>& positions) {
@@ -75,15 +51,16 @@ WeldSummary summarize_weld(const Mesh& mesh) {
     // A position is counted at its first used vertex: the group's first one may be unused.
     s.positions_used += used[v] && (first[v] == v || !used[first[v]]);
   }
-  s.boundary_by_position = boundary_edge_count(mesh, first);
+  const BoundaryCurve curve = extract_boundary(mesh, first);
+  s.boundary_by_position = curve.segment_count();
+  if (s.boundary_by_position > 0) (void)boundary_loops(curve, s.boundary_loops);
   if (s.positions_used == s.vertices_used) {
     s.boundary_by_index = s.boundary_by_position;  // no two vertices share a position: the same topology
   } else {
     std::vector<uint32_t> identity(mesh.positions.size());
     std::iota(identity.begin(), identity.end(), 0u);
-    s.boundary_by_index = boundary_edge_count(mesh, identity);
+    s.boundary_by_index = extract_boundary(mesh, identity).segment_count();
   }
-  if (s.boundary_by_position > 0) (void)boundary_loops(extract_boundary(mesh), s.boundary_loops);
   return s;
 }
 

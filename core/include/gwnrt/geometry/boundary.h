@@ -21,6 +21,10 @@ struct BoundaryCurve {
   std::size_t segment_count() const { return endpoints.size() / 2; }
 };
 BoundaryCurve extract_boundary(const Mesh& mesh);
+// The same with vertices matched by `vertex_of` (one id per vertex; equal ids are one vertex):
+// extract_boundary(mesh) is this with vertices_by_position (geometry/weld.h), the identity matches
+// them by index.
+BoundaryCurve extract_boundary(const Mesh& mesh, std::span<const uint32_t> vertex_of);
 
 // Connected components of ∂M (loops, or any closed chains): the loop index of each segment.
 std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_count);
