@@ -317,6 +317,17 @@ TEST(Weld, ASoupWeldedIsTheMeshItCameFrom) {
   }
 }
 
+// A position shared by used vertices counts once, also where the group's first vertex is one no
+// triangle uses.
+TEST(Weld, PositionsAreCountedOncePerGroup) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {0, 0, 1}};
+  m.triangles = {{1, 2, 3}, {4, 3, 5}};  // vertex 0 unused; 1 and 4 share its position
+  const WeldSummary w = summarize_weld(m);
+  EXPECT_EQ(w.vertices_used, 5u);
+  EXPECT_EQ(w.positions_used, 4u);
+}
+
 // weld_within against every pair: the groups are those that chains of pairs within the distance
 // make, no more and no fewer, and each vertex ends on its group's lowest-numbered member.
 TEST(Weld, WithinADistanceMergesExactlyThePairsWithinIt) {

@@ -46,10 +46,14 @@ WeldSummary summarize_weld(const Mesh& mesh) {
   std::vector<char> used(mesh.positions.size(), 0);
   for (const uvec3& t : mesh.triangles) used[t.x] = used[t.y] = used[t.z] = 1;
   const std::vector<uint32_t> first = vertices_by_position(mesh.positions);
+  std::vector<char> counted(mesh.positions.size(), 0);  // per group (its first vertex, used or not)
   for (size_t v = 0; v < used.size(); ++v) {
-    s.vertices_used += used[v];
-    // A position is counted at its first used vertex: the group's first one may be unused.
-    s.positions_used += used[v] && (first[v] == v || !used[first[v]]);
+    if (!used[v]) continue;
+    ++s.vertices_used;
+    if (!counted[first[v]]) {
+      counted[first[v]] = 1;
+      ++s.positions_used;
+    }
   }
   const BoundaryCurve curve = extract_boundary(mesh, first);
   s.boundary_by_position = curve.segment_count();
