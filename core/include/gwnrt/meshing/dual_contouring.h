@@ -361,8 +361,6 @@ struct HermitePass {
     int jumps[1];
     mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
     out.jumps = jumps[0];
-    out.axis = w.axis;
-    out.sign = w.sign;
     return true;
   }
 };

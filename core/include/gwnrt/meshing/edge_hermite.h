@@ -77,13 +77,11 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
 }  // namespace detail
 
 // A first-order estimate of w whose bounds hold on a box that holds the edge (field/box_winding.h):
-// its centre, the ray its J is taken along, and J at the edge's start.
+// its centre, and J at the edge's start (along the ray the estimate's ŵ is taken along).
 struct EdgeBound {
   TaylorPoint point;
   BoxFieldBounds bounds;
   vec3 centre{0.0f};
-  int axis = 2;  // the ray J is taken along
-  float sign = 1.0f;
   int jumps = 0;
 };
 
@@ -102,15 +100,8 @@ GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptio
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
-  int jumps = bound ? bound->jumps : 0;
-  // With a bound, J is known on every interval between crossings (it falls by each crossing's
-  // jump): w there is the cone's traversal alone, no walk through M.
-  const auto value = [&](float t) {
-    const vec3 x = p0 + t * direction;
-    return (bound ? winding_from_mesh_jumps(m, x, bound->axis, bound->sign, jumps)
-                  : evaluate_winding(m, x, winding).w) -
-           level;
-  };
+  const auto value = [&](float t) { return evaluate_winding(m, p0 + t * direction, winding).w - level; };
+  int jumps = bound ? bound->jumps : 0;  // J on the current interval: it falls by each crossing's jump
   const bool piecewise_constant =
       m.cone.triangle_count == 0 && resolve_winding_method(m, winding.method) == WindingMethod::kCrossing;
   const float offset = kCrossingOffset * h;
