@@ -164,11 +164,15 @@ GWNRT_HD inline bool taylor_point(const ModelView& m, const vec3& x, int axis, f
 
 namespace detail {
 
+// kBoxWindingMargin, grown with |ŵ(p)| for the float round-off of ŵ(p) − J.
+GWNRT_HD inline float taylor_margin(const TaylorPoint& p) {
+  return kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
+}
+
 // How far the first-order estimate from p may be from ŵ at `offset` from p: ½·|H|·r² (Taylor's
 // remainder), ∇w(p)'s own error (kTaylorGradientError), and the margin.
 GWNRT_HD inline float taylor_reach(const TaylorPoint& p, const BoxFieldBounds& b, float r) {
-  return 0.5f * b.hessian * r * r + kTaylorGradientError * glm::length(p.gradient) * r +
-         kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
+  return 0.5f * b.hessian * r * r + kTaylorGradientError * glm::length(p.gradient) * r + taylor_margin(p);
 }
 
 }  // namespace detail
@@ -182,8 +186,7 @@ GWNRT_HD inline float taylor_estimate(const TaylorPoint& p, const BoxFieldBounds
   const float constant = p.w_hat - float(jumps) - level;
   const float linear = constant + glm::dot(p.gradient, offset);
   if (fabsf(linear) > detail::taylor_reach(p, b, r)) return linear;
-  const float margin = kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
-  return fabsf(constant) > b.gradient * r + margin ? constant : __builtin_nanf("");
+  return fabsf(constant) > b.gradient * r + detail::taylor_margin(p) ? constant : __builtin_nanf("");
 }
 
 // Whether the first-order estimate from p may leave some point of `box` unsettled: the range of
@@ -216,8 +219,7 @@ GWNRT_HD inline bool taylor_settles_segment(const TaylorPoint& p, const BoxField
   const float ra = glm::length(a_offset), rb = glm::length(b_offset);
   const float la = constant + glm::dot(p.gradient, a_offset), lb = constant + glm::dot(p.gradient, b_offset);
   if (s * la > detail::taylor_reach(p, b, ra) && s * lb > detail::taylor_reach(p, b, rb)) return true;
-  const float margin = kBoxWindingMargin * (1.0f + 1e-3f * fabsf(p.w_hat));
-  return s * constant > b.gradient * max_of(ra, rb) + margin;
+  return s * constant > b.gradient * max_of(ra, rb) + detail::taylor_margin(p);
 }
 
 }  // namespace gwnrt

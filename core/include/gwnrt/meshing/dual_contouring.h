@@ -74,7 +74,6 @@ GWNRT_HD inline float corner_winding_value(const ModelView& m, const vec3& x, in
 // The axis ray a block's corners take: the one by which its centre (corner 4, 4, 4 of the block)
 // leaves M's box soonest.
 struct BlockRay {
-  vec3 centre;
   int axis;
   float sign;
 };
@@ -83,7 +82,7 @@ GWNRT_HD inline BlockRay block_ray(const MeshGrid& grid, const Aabb& bounds, con
   const vec3 centre =
       grid.corner_position({b.x * kBlockCells + half, b.y * kBlockCells + half, b.z * kBlockCells + half});
   const RayFrame exit = shortest_exit_axis_ray(bounds, centre);
-  return {centre, exit.kz, exit.sz > 0.0f ? 1.0f : -1.0f};
+  return {exit.kz, exit.sz > 0.0f ? 1.0f : -1.0f};
 }
 
 // Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
@@ -113,6 +112,33 @@ GWNRT_HD inline Aabb corner_box(const MeshGrid& grid, const GridCoord& b, const 
   box.hi = grid.corner_position({b.x * kBlockCells + first.x + count - 1, b.y * kBlockCells + first.y + count - 1,
                                  b.z * kBlockCells + first.z + count - 1});
   return box;
+}
+
+// A first-order centre of a block (BlockWinding) and the bounds it is read with, which hold on the
+// corners [local & ~(span − 1), + span) along each axis.
+struct TaylorCentre {
+  const TaylorPoint* point = nullptr;
+  const BoxFieldBounds* bounds = nullptr;
+  GridCoord first;  // the centre's own corners: [first, first + count)
+  int count = 0;
+  int span = 0;
+  GWNRT_HD vec3 centre(const MeshGrid& grid, const GridCoord& b) const {
+    return corner_box(grid, b, first, count).centre();
+  }
+};
+
+// The centres computed for corner `local` of a block, finest first: its eighth's eighth, its
+// eighth (both read with the eighth's bounds), the block.
+GWNRT_HD inline int taylor_centres(const BlockWinding& w, const GridCoord& local, TaylorCentre (&out)[3]) {
+  const int fine = local.x / 2 + 4 * (local.y / 2) + 16 * (local.z / 2);
+  const int mid = local.x / 4 + 2 * (local.y / 4) + 4 * (local.z / 4);
+  int n = 0;
+  if ((w.fine >> fine) & 1u)
+    out[n++] = {&w.point[9 + fine], &w.bounds[1 + mid], {local.x & ~1, local.y & ~1, local.z & ~1}, 2, 4};
+  if ((w.mid >> mid) & 1u)
+    out[n++] = {&w.point[1 + mid], &w.bounds[1 + mid], {local.x & ~3, local.y & ~3, local.z & ~3}, 4, 4};
+  if (w.block) out[n++] = {&w.point[0], &w.bounds[0], {0, 0, 0}, kBlockCells, kBlockCells};
+  return n;
 }
 
 struct BlockWindingPass {
@@ -184,22 +210,13 @@ struct BlockWindingPass {
   // w − w* at corner `local` (at x) from the finest centre that holds it, or NaN.
   GWNRT_HD static float estimate(const MeshGrid& grid, const GridCoord& b, const BlockWinding& w,
                                  const GridCoord& local, const vec3& x, int jumps, float level) {
-    const int fine = local.x / 2 + 4 * (local.y / 2) + 16 * (local.z / 2);
-    const int mid = local.x / 4 + 2 * (local.y / 4) + 4 * (local.z / 4);
-    float f = __builtin_nanf("");
-    if ((w.fine >> fine) & 1u) {
-      const vec3 centre = corner_box(grid, b, {local.x & ~1, local.y & ~1, local.z & ~1}, 2).centre();
-      f = taylor_estimate(w.point[9 + fine], w.bounds[1 + mid], jumps, x - centre, level);
+    TaylorCentre c[3];
+    const int n = taylor_centres(w, local, c);
+    for (int i = 0; i < n; ++i) {
+      const float f = taylor_estimate(*c[i].point, *c[i].bounds, jumps, x - c[i].centre(grid, b), level);
+      if (f == f) return f;
     }
-    if (!(f == f) && ((w.mid >> mid) & 1u)) {
-      const vec3 centre = corner_box(grid, b, {local.x & ~3, local.y & ~3, local.z & ~3}, 4).centre();
-      f = taylor_estimate(w.point[1 + mid], w.bounds[1 + mid], jumps, x - centre, level);
-    }
-    if (!(f == f) && w.block) {
-      const vec3 centre = corner_box(grid, b, {0, 0, 0}, kBlockCells).centre();
-      f = taylor_estimate(w.point[0], w.bounds[0], jumps, x - centre, level);
-    }
-    return f;
+    return __builtin_nanf("");
   }
 };
 
@@ -223,9 +240,9 @@ struct CornerColumnPass {
     const uint32_t needed_from = view.needed_from[slot];
     const bool exact = resolve_winding_method(model, winding.method) == WindingMethod::kCrossing;
     const BlockWinding* bound = exact && block_winding && block_winding[slot].any() ? block_winding + slot : nullptr;
-    BlockRay ray{vec3(0.0f), 2, 1.0f};
+    BlockRay ray{2, 1.0f};
     if (bound)
-      ray = {vec3(0.0f), bound->axis, bound->sign};
+      ray = {bound->axis, bound->sign};
     else if (exact)
       ray = block_ray(view.grid, model.bounds, b);
     const int axis = ray.axis;
@@ -337,26 +354,16 @@ struct HermitePass {
   GWNRT_HD bool edge_bound(uint64_t corner, int axis, const vec3& p0, EdgeBound& out) const {
     const uint32_t slot = uint32_t(corner / kBlockItems);
     const BlockWinding& w = block_winding[slot];
-    if (!w.any()) return false;
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const GridCoord l = local_coord(uint32_t(corner % kBlockItems));
-    const int fine = l.x / 2 + 4 * (l.y / 2) + 16 * (l.z / 2), mid = l.x / 4 + 2 * (l.y / 4) + 4 * (l.z / 4);
-    const bool in_mid = l[axis] % 4 != 3, in_block = l[axis] != kBlockCells - 1;
-    if (in_mid && ((w.fine >> fine) & 1u)) {
-      out.point = w.point[9 + fine];
-      out.centre = corner_box(view.grid, b, {l.x & ~1, l.y & ~1, l.z & ~1}, 2).centre();
-      out.bounds = w.bounds[1 + mid];
-    } else if (in_mid && ((w.mid >> mid) & 1u)) {
-      out.point = w.point[1 + mid];
-      out.centre = corner_box(view.grid, b, {l.x & ~3, l.y & ~3, l.z & ~3}, 4).centre();
-      out.bounds = w.bounds[1 + mid];
-    } else if (in_block && w.block) {
-      out.point = w.point[0];
-      out.centre = corner_box(view.grid, b, {0, 0, 0}, kBlockCells).centre();
-      out.bounds = w.bounds[0];
-    } else {
-      return false;
-    }
+    TaylorCentre c[3];
+    const int n = taylor_centres(w, l, c);
+    int i = 0;
+    while (i < n && l[axis] % c[i].span == c[i].span - 1) ++i;  // the edge leaves the bounds' box
+    if (i == n) return false;
+    out.point = *c[i].point;
+    out.bounds = *c[i].bounds;
+    out.centre = c[i].centre(view.grid, b);
     const vec3 points[1] = {p0};
     int jumps[1];
     mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
