@@ -81,9 +81,9 @@ nlohmann::json report_json(const gwnrt::MeshingStats& stats, const gwnrt::MeshQu
                     {"normal_deviation_max_deg", d.normal_deviation_max_deg},
                     {"surface_points", d.surface_points},
                     {"output_samples", d.output_samples}};
-  j["seconds"] = {{"total", mesh_seconds},    {"scout", p.scout},       {"corners", p.corners},
-                  {"edges", p.edges},         {"vertices", p.vertices}, {"faces", p.faces},
-                  {"smoothing", p.smoothing}, {"output", p.output},     {"report", q.seconds}};
+  j["seconds"] = {{"total", mesh_seconds},  {"scout", p.scout},   {"corners", p.corners}, {"edges", p.edges},
+                  {"vertices", p.vertices}, {"faces", p.faces},   {"repair", p.repair},   {"smoothing", p.smoothing},
+                  {"output", p.output},     {"report", q.seconds}};
   j["report_seconds"] = {{"topology", q.seconds_topology},
                          {"self_intersections", q.seconds_self_intersections},
                          {"to_surface", d.seconds_to_surface},
@@ -93,6 +93,10 @@ nlohmann::json report_json(const gwnrt::MeshingStats& stats, const gwnrt::MeshQu
                 {"fallback", stats.fallback_edges}, {"capped", stats.capped_edges}, {"open", stats.open_edges}};
   j["blocks"] = {{"active", stats.active_blocks}, {"evaluated", stats.evaluated_blocks}};
   j["multi_component_cells"] = stats.multi_component_cells;
+  j["repair"] = {{"pairs_found", stats.self_intersections_repaired},
+                 {"rounds", stats.repair_rounds},
+                 {"vertex_moves", stats.repaired_vertex_moves},
+                 {"pairs_left", stats.self_intersections_left}};
   return j;
 }
 
@@ -115,10 +119,10 @@ void print_report(const nlohmann::json& j) {
   std::printf("normal deviation from S: mean %.3f deg, max %.3f deg\n", double(d["normal_deviation_mean_deg"]),
               double(d["normal_deviation_max_deg"]));
   std::printf(
-      "seconds: total %.3f (scout %.3f, corners %.3f, edges %.3f, vertices %.3f, faces %.3f, smoothing %.3f, "
-      "output %.3f); report %.3f\n",
+      "seconds: total %.3f (scout %.3f, corners %.3f, edges %.3f, vertices %.3f, faces %.3f, repair %.3f, "
+      "smoothing %.3f, output %.3f); report %.3f\n",
       double(s["total"]), double(s["scout"]), double(s["corners"]), double(s["edges"]), double(s["vertices"]),
-      double(s["faces"]), double(s["smoothing"]), double(s["output"]), double(s["report"]));
+      double(s["faces"]), double(s["repair"]), double(s["smoothing"]), double(s["output"]), double(s["report"]));
   std::printf("memory: pipeline arrays %s, process peak %s\n",
               gwnrt::memory_size_text(uint64_t(j["memory"]["pipeline_bytes"])).c_str(),
               gwnrt::memory_size_text(uint64_t(j["memory"]["peak_resident_bytes"])).c_str());
@@ -246,11 +250,13 @@ int main(int argc, char** argv) {
     const gwnrt::MeshingPassTimes& t = stats.seconds;
     std::fprintf(stderr,
                  "%s: passes (s): scout %.3f, corners %.3f (%llu blocks), edges %.3f (%llu: %llu sheet, %llu smooth), "
-                 "vertices %.3f, faces %.3f, smoothing %.3f, output %.3f; %s at the peak\n",
+                 "vertices %.3f, faces %.3f, repair %.3f (%llu intersecting pairs, %llu vertex moves), smoothing %.3f, "
+                 "output %.3f; %s at the peak\n",
                  kProgram, t.scout, t.corners, (unsigned long long)stats.evaluated_blocks, t.edges,
                  (unsigned long long)stats.crossing_edges, (unsigned long long)stats.sheet_edges,
-                 (unsigned long long)stats.smooth_edges, t.vertices, t.faces, t.smoothing, t.output,
-                 gwnrt::memory_size_text(stats.bytes).c_str());
+                 (unsigned long long)stats.smooth_edges, t.vertices, t.faces, t.repair,
+                 (unsigned long long)stats.self_intersections_repaired, (unsigned long long)stats.repaired_vertex_moves,
+                 t.smoothing, t.output, gwnrt::memory_size_text(stats.bytes).c_str());
   }
   if (report || !report_json_path.empty()) {
     gwnrt::MeshQualityReport quality;
@@ -274,6 +280,9 @@ int main(int argc, char** argv) {
   if (stats.open_edges)
     std::fprintf(stderr, "%s: warning: %llu crossing edges lacked a cell (the output has holes there)\n", kProgram,
                  (unsigned long long)stats.open_edges);
+  if (stats.self_intersections_left)
+    std::fprintf(stderr, "%s: warning: %llu pairs of triangles still intersect after the repair's last round\n",
+                 kProgram, (unsigned long long)stats.self_intersections_left);
   if (stats.capped_edges)
     std::fprintf(stderr, "%s: warning: %llu edges reached the crossing or root-step cap\n", kProgram,
                  (unsigned long long)stats.capped_edges);

@@ -38,9 +38,12 @@ py::dict stats_dict(const MeshingStats& s) {
   d["capped_edges"] = s.capped_edges;
   d["multi_component_cells"] = s.multi_component_cells;
   d["open_edges"] = s.open_edges;
+  d["self_intersections_repaired"] = s.self_intersections_repaired;
+  d["repair_rounds"] = s.repair_rounds;
+  d["repaired_vertex_moves"] = s.repaired_vertex_moves;
+  d["self_intersections_left"] = s.self_intersections_left;
   d["bytes"] = s.bytes;
-  const MeshingPassTimes& t = s.seconds;
-  d["seconds"] = t.scout + t.corners + t.edges + t.vertices + t.faces + t.smoothing + t.output;
+  d["seconds"] = s.seconds.total();
   d["message"] = s.message;
   return d;
 }

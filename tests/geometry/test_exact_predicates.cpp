@@ -228,5 +228,77 @@ TEST(ExactPredicate, TrianglePairsMatchSeparatingAxisReference) {
   for (int s = 0; s < 4; ++s) EXPECT_GT(by_shared[s], 100) << s;
 }
 
+// The quick filter before the pair test: whenever it says apart, the exact test agrees, on
+// exactly coplanar grids and on the same grids with every coordinate nudged by a few ulps (the
+// nearly coplanar pairs of a flat region, which the filter decides in projection); and it decides
+// most of the pairs that do not meet.
+TEST(ExactPredicate, ApartFilterNeverHidesAnIntersection) {
+  std::mt19937_64 g(11);
+  std::uniform_int_distribution<int64_t> coord(0, 2);
+  std::uniform_int_distribution<int> nudge(-3, 3);
+  int apart = 0, disjoint = 0, met = 0;
+  for (int it = 0; it < 40000; ++it) {
+    std::array<I3, 3> p, q;
+    for (auto& v : p) v = {coord(g), coord(g), coord(g)};
+    for (auto& v : q) v = {coord(g), coord(g), coord(g)};
+    if (g() % 2) q[0] = p[g() % 3];
+    if (g() % 3 == 0) q[1] = p[1 + g() % 2];
+    exact::Triangle fp, fq;
+    const bool nudged = it % 2 == 1;
+    for (int k = 0; k < 3; ++k) {
+      fp[k] = to_float(p[k], 0.25f) + vec3(3.0f);
+      fq[k] = to_float(q[k], 0.25f) + vec3(3.0f);
+    }
+    if (nudged)  // shared positions stay shared: nudge each distinct position once
+      for (int k = 0; k < 3; ++k) {
+        const vec3 before = fp[k];
+        for (int a = 0; a < 3; ++a) fp[k][a] = std::nextafter(fp[k][a], nudge(g) > 0 ? 10.0f : 0.0f);
+        for (int j = 0; j < 3; ++j)
+          if (fq[j] == before) fq[j] = fp[k];
+      }
+    if (exact::collinear(fp[0], fp[1], fp[2]) || exact::collinear(fq[0], fq[1], fq[2])) continue;
+    const bool meet = exact::triangles_of_nonzero_area_intersect(fp, fq);
+    const bool filtered = exact::apart_beyond_shared(fp, exact::PlaneFilter(fp), fq, exact::PlaneFilter(fq));
+    ASSERT_FALSE(filtered && meet) << it;
+    met += meet;
+    disjoint += !meet;
+    apart += filtered;
+  }
+  EXPECT_GT(met, 2000);
+  EXPECT_GT(apart, disjoint / 2) << "of " << disjoint << " pairs that do not meet";
+}
+
+// PlaneFilter::side, where it decides, is orient3d: on random points, and on points of the
+// triangle's plane (integer combinations of its edges: exactly coplanar) and an ulp off it, which
+// it leaves undecided (orient3d decides them by expansion).
+TEST(ExactPredicate, PlaneFilterSideIsOrient3dWhereDecided) {
+  std::mt19937_64 g(13);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> small(-20, 20);
+  int decided = 0, undecided = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const auto grid_point = [&] { return vec3(float(small(g)), float(small(g)), float(small(g))); };
+    exact::Triangle t;
+    vec3 x;
+    if (it % 2 == 0) {
+      t = {vec3(u(g), u(g), u(g)), vec3(u(g), u(g), u(g)), vec3(u(g), u(g), u(g))};
+      x = vec3(u(g), u(g), u(g));
+    } else {
+      t = {grid_point(), grid_point(), grid_point()};
+      const float a = float(small(g)), b = float(small(g));
+      x = t[0] + a * (t[1] - t[0]) + b * (t[2] - t[0]);  // exact: small integers
+      if (it % 4 == 1) x.x = std::nextafter(x.x, 1e9f);
+    }
+    const int side = exact::PlaneFilter(t).side(x);
+    if (side == exact::kUndecided) {
+      ++undecided;
+      continue;
+    }
+    ++decided;
+    ASSERT_EQ(side, exact::orient3d(t[0], t[1], t[2], x)) << it;
+  }
+  EXPECT_GT(decided, 10000);
+  EXPECT_GT(undecided, 1000);
+}
 }  // namespace
 }  // namespace gwnrt

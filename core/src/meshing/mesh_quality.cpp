@@ -184,11 +184,6 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   return Status::Ok();
 }
 
-inline bool boxes_overlap(const Aabb& a, const Aabb& b) {
-  return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y && a.lo.z <= b.hi.z &&
-         b.lo.z <= a.hi.z;
-}
-
 // The lanes of a node whose boxes overlap b, as bits (empty lanes have inverted boxes and fail):
 // all four without a branch, so that they are compared as one vector.
 inline unsigned overlapping_lanes(const WideNode& node, const Aabb& b) {
@@ -278,7 +273,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
           // Each unordered pair once: the later one in leaf order is tested from the earlier.
           const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
           for (size_t j = first; j < last; ++j) {
-            if (!boxes_overlap(q, box[j]) || !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j])) continue;
+            if (!q.overlaps(box[j]) || !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j])) continue;
             ++local;
             if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
           }

@@ -113,6 +113,9 @@ struct Aabb {
   }
   GWNRT_HD vec3 centre() const { return 0.5f * (lo + hi); }
   GWNRT_HD bool valid() const { return lo.x <= hi.x; }
+  GWNRT_HD bool overlaps(const Aabb& b) const {  // the closed boxes share a point
+    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z && b.lo.z <= hi.z;
+  }
 };
 
 // Owning topology + bounds, built in parallel by median splits on primitive centroids.

@@ -10,6 +10,7 @@
 #include "gwnrt/field/box_winding.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/evaluate_winding.h"
+#include "gwnrt/geometry/exact_predicates.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/meshing/cell_topology.h"
 #include "gwnrt/meshing/edge_hermite.h"
@@ -487,6 +488,17 @@ struct CellCountPass {
   }
 };
 
+// p clamped into the open cell: each coordinate strictly between the cell's corner positions
+// (where the grid's floats leave room between them).
+GWNRT_HD inline vec3 strictly_inside_cell(const MeshGrid& grid, const GridCoord& cell, vec3 p) {
+  const vec3 lo = grid.corner_position(cell), hi = grid.corner_position({cell.x + 1, cell.y + 1, cell.z + 1});
+  for (int a = 0; a < 3; ++a) {
+    const float first = nextafterf(lo[a], hi[a]), last = nextafterf(hi[a], lo[a]);
+    if (first <= last) p[a] = fminf(fmaxf(p[a], first), last);
+  }
+  return p;
+}
+
 // Each component's vertex: the QEF of its edges' Hermite data in cell units (well conditioned
 // whatever the model's scale), solved and clamped to the cell; its normal the mean of theirs.
 struct CellVertexPass {
@@ -528,7 +540,7 @@ struct CellVertexPass {
       // onto the same cell edge and their triangles overlap. Single components keep the whole
       // cell: a cube's corner lies outside its crossings' box. (docs/performance.md, meshing.)
       const dvec3 x = count > 1 ? solve_qef(qef[p], box_lo[p], box_hi[p]) : solve_qef(qef[p], dvec3(0.0), dvec3(1.0));
-      positions[first + p] = lo + vec3(x) * view.grid.cell;
+      positions[first + p] = strictly_inside_cell(view.grid, cell, lo + vec3(x) * view.grid.cell);
       const dvec3 n = qef[p].normal_sum;
       const double length = glm::length(n);
       normals[first + p] = length > 0 ? vec3(n / length) : vec3(0.0f, 0.0f, 1.0f);
@@ -628,6 +640,149 @@ struct QuadPass {
     } else {
       triangles[2 * i] = {v[0], v[1], v[3]};
       triangles[2 * i + 1] = {v[1], v[2], v[3]};
+    }
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Repair of intersecting triangles.
+//
+// Every vertex lies strictly inside its cell (strictly_inside_cell), so a triangle of the quad of
+// edge E lies in the interior of the box of the four cells around E, and two triangles that meet
+// share a cell of both their edges' four. Each pair is tested, exactly, in the lowest such cell
+// (SelfIntersectionPass); the vertices of the pairs that meet other than in a shared vertex or
+// edge move toward their component's safe point (VertexRepairPass) and the cells around them are
+// tested again, for at most kRepairRounds rounds.
+
+// The lowest of the four cells around the edge along `axis` from corner c.
+GWNRT_HD inline GridCoord edge_lowest_cell(GridCoord c, int axis) {
+  --c[(axis + 1) % 3];
+  --c[(axis + 2) % 3];
+  return c;
+}
+
+// The cell a pair of triangles is tested in: the lowest cell around both their edges (whose
+// lowest cells are a and b, the two edges being edges of one cell).
+GWNRT_HD inline GridCoord pair_cell(const GridCoord& a, const GridCoord& b) {
+  return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
+}
+
+inline constexpr int kRepairRounds = 6;
+// Rounds before this one move a vertex half way to its safe point; from it on, onto it.
+inline constexpr int kRepairSnapRound = 2;
+// Counters of the repair (MeshingStats): pairs found in the first round, pairs left after the
+// last, vertex moves.
+enum RepairTally : int { kTallyPairsFound = 0, kTallyPairsLeft = 1, kTallyVertexMoves = 2, kRepairTallies = 3 };
+
+// Per cell with vertices (run over the vertices: the cell's first vertex does it) whose `dirty`
+// flag is set (every such cell when dirty is null): the pairs of triangles of its edges' quads
+// tested in it that meet; their vertices get `flag` 1, the count goes to pairs[0].
+struct SelfIntersectionPass {
+  SparseGridView view;
+  const uint64_t* vertex_cell;
+  const uvec3* triangles;  // two per edge (kEmptyLane: none)
+  const vec3* positions;
+  const uint32_t* dirty;
+  uint32_t* flag;
+  unsigned long long* pairs;
+
+  GWNRT_HD void operator()(uint64_t vertex) const {
+    const uint64_t item = vertex_cell[vertex];
+    if (vertex != view.cell_vertex_offset[item] || (dirty && !dirty[item])) return;
+    const GridCoord cell = view.coord_of_item(item);
+    constexpr int kMax = 2 * kCellEdges;
+    uint32_t id[kMax];
+    GridCoord low[kMax];
+    exact::Triangle tri[kMax];
+    exact::PlaneFilter plane[kMax];
+    vec3 box_lo[kMax], box_hi[kMax];
+    int n = 0;
+    for (int e = 0; e < kCellEdges; ++e) {
+      const int corner = edge_corner(e), axis = edge_axis(e);
+      const GridCoord c{cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)};
+      const uint32_t k = edge_index(view, c, axis);
+      if (k == kEmptyLane) continue;
+      for (uint32_t t = 2 * k; t < 2 * k + 2; ++t) {
+        const uvec3 v = triangles[t];
+        if (v.x == kEmptyLane) continue;
+        id[n] = t;
+        low[n] = edge_lowest_cell(c, axis);
+        for (int j = 0; j < 3; ++j) tri[n][j] = positions[v[j]];
+        box_lo[n] = glm::min(tri[n][0], glm::min(tri[n][1], tri[n][2]));
+        box_hi[n] = glm::max(tri[n][0], glm::max(tri[n][1], tri[n][2]));
+        plane[n] = exact::PlaneFilter(tri[n]);
+        // A zero-area triangle meets nothing by the pair test's rule.
+        if (plane[n].certainly_nonzero_area() || !exact::collinear(tri[n][0], tri[n][1], tri[n][2])) ++n;
+      }
+    }
+    unsigned long long found = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        const GridCoord at = pair_cell(low[i], low[j]);
+        if (at.x != cell.x || at.y != cell.y || at.z != cell.z) continue;
+        const bool boxes_meet = box_lo[i].x <= box_hi[j].x && box_lo[j].x <= box_hi[i].x &&
+                                box_lo[i].y <= box_hi[j].y && box_lo[j].y <= box_hi[i].y &&
+                                box_lo[i].z <= box_hi[j].z && box_lo[j].z <= box_hi[i].z;
+        if (!boxes_meet) continue;
+        // Shared vertices by index (the filter stays safe for distinct vertices that coincide).
+        const uvec3 a = triangles[id[i]], b = triangles[id[j]];
+        int match[3];
+        for (int k = 0; k < 3; ++k) match[k] = b[k] == a.x ? 0 : (b[k] == a.y ? 1 : (b[k] == a.z ? 2 : -1));
+        if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], match) ||
+            !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
+          continue;
+        ++found;
+        for (const uint32_t t : {id[i], id[j]})
+          for (int k = 0; k < 3; ++k) atomic_or(flag + triangles[t][k], 1u);
+      }
+    if (found) atomic_add(pairs, found);
+  }
+};
+
+// A vertex's safe point: the mean of the midpoints of its component's edges in the cell (that
+// of surface nets, away from the cell's faces), strictly inside the cell.
+GWNRT_HD inline vec3 component_safe_point(const SparseGridView& view, const GridCoord& cell, uint32_t parts,
+                                          int component) {
+  vec3 sum(0.0f);
+  int count = 0;
+  for (int e = 0; e < kCellEdges; ++e) {
+    const int corner = edge_corner(e), axis = edge_axis(e);
+    const GridCoord c{cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)};
+    if (edge_index(view, c, axis) == kEmptyLane || packed_component(parts, e) != component) continue;
+    vec3 mid(float(corner & 1), float((corner >> 1) & 1), float((corner >> 2) & 1));
+    mid[axis] = 0.5f;
+    sum += mid;
+    ++count;
+  }
+  const vec3 local = count > 0 ? sum / float(count) : vec3(0.5f);
+  return strictly_inside_cell(view.grid, cell, view.grid.corner_position(cell) + local * view.grid.cell);
+}
+
+// Per flagged vertex: moved half way to its safe point (onto it when `snap`), its flag cleared,
+// the cells around it (whose tests read its triangles) marked dirty, the move counted.
+struct VertexRepairPass {
+  SparseGridView view;
+  const uint64_t* vertex_cell;
+  vec3* positions;
+  uint32_t* flag;
+  uint32_t* dirty;
+  bool snap;
+  unsigned long long* moves;
+
+  GWNRT_HD void operator()(uint64_t v) const {
+    if (!flag[v]) return;
+    flag[v] = 0;
+    const uint64_t item = vertex_cell[v];
+    const GridCoord cell = view.coord_of_item(item);
+    const int component = int(v - view.cell_vertex_offset[item]);
+    const vec3 safe = component_safe_point(view, cell, view.cell_parts[item], component);
+    const vec3 p = snap ? safe : strictly_inside_cell(view.grid, cell, 0.5f * (positions[v] + safe));
+    if (p == positions[v]) return;
+    positions[v] = p;
+    atomic_add(moves, 1ull);
+    for (int d = 0; d < 27; ++d) {
+      const uint64_t near = view.item_of({cell.x + d % 3 - 1, cell.y + (d / 3) % 3 - 1, cell.z + d / 9 - 1}, 0);
+      if (near != ~uint64_t(0)) atomic_or(dirty + near, 1u);
     }
   }
 };

@@ -62,6 +62,10 @@ struct MeshingOptions {
   // every corner evaluated (the reference the tests hold it to). The mesh's topology is the same;
   // smooth Hermite points may move within the root tolerance.
   bool settle_corners_by_bounds = true;
+  // Pairs of output triangles that meet other than in a shared vertex or edge (by exact
+  // predicates) are repaired by moving their vertices toward their cells' safe points (dual
+  // contouring only; MeshingStats says what it did). Off: the vertices stay where the QEF put them.
+  bool repair_self_intersections = true;
   // Refused (with what it would need) when the pipeline's arrays would exceed this many bytes.
   uint64_t memory_budget = uint64_t(8) << 30;
   // When given: work items done, and the items known so far (grown as each pass is sized).
@@ -70,7 +74,8 @@ struct MeshingOptions {
 };
 
 struct MeshingPassTimes {
-  double scout = 0, corners = 0, edges = 0, vertices = 0, faces = 0, smoothing = 0, output = 0;
+  double scout = 0, corners = 0, edges = 0, vertices = 0, faces = 0, repair = 0, smoothing = 0, output = 0;
+  double total() const { return scout + corners + edges + vertices + faces + repair + smoothing + output; }
 };
 
 struct MeshingStats {
@@ -85,6 +90,12 @@ struct MeshingStats {
   uint64_t multi_component_cells = 0;  // cells with two or more vertices
   uint64_t open_edges = 0;  // sign-changing edges whose four cells were not all active (0 unless a bound failed)
   uint64_t bytes = 0;       // the pipeline's largest arrays together, at their peak
+  // The repair: intersecting pairs found before it, rounds run, vertex moves, and pairs left
+  // after its last round (0 unless it ran out of rounds).
+  uint64_t self_intersections_repaired = 0;
+  uint32_t repair_rounds = 0;
+  uint64_t repaired_vertex_moves = 0;
+  uint64_t self_intersections_left = 0;
   MeshingPassTimes seconds;
   std::string message;  // e.g. why the mesh is empty
 };

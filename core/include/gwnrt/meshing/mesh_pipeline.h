@@ -379,6 +379,43 @@ void make_faces(Backend& backend, const SparseGridArrays<Backend>& g, const Edge
                        QuadPass{g.view, e.edges.data(), e.hermite.data(), v.positions.data(), triangles.data()});
 }
 
+// 6b. Repair: the pairs of triangles that meet other than in a shared vertex or edge found
+// exactly, cell by cell, and their vertices moved toward their safe points, the cells around the
+// moved ones tested again, for at most kRepairRounds rounds (dual_contouring.h).
+template <class Backend>
+Status repair_self_intersections(Backend& backend, const MeshingOptions& options, MemoryBudget& budget,
+                                 const SparseGridArrays<Backend>& g, VertexArrays<Backend>& v,
+                                 const typename Backend::template Array<uvec3>& triangles, MeshingStats& stats) {
+  if (!options.repair_self_intersections) return Status::Ok();
+  const uint64_t items = g.slots * kBlockItems;
+  if (Status s = budget.reserve((v.total + items) * sizeof(uint32_t), "the repair's flags"); !s.ok()) return s;
+  typename Backend::template Array<uint32_t> flag, dirty;
+  flag.resize(v.total);  // zeroed
+  typename Backend::template Array<unsigned long long> tally;
+  tally.resize(kRepairTallies);
+  for (int round = 0;; ++round) {
+    typename Backend::template Array<unsigned long long> pairs;
+    pairs.resize(1);
+    backend.parallel_for(v.total,
+                         SelfIntersectionPass{g.view, v.cell.data(), triangles.data(), v.positions.data(),
+                                              round == 0 ? nullptr : dirty.data(), flag.data(), pairs.data()},
+                         64);
+    const unsigned long long found = backend.to_host(pairs, 0);
+    if (round == 0) stats.self_intersections_repaired = found;
+    stats.self_intersections_left = found;
+    if (found == 0 || round == kRepairRounds) break;
+    typename Backend::template Array<uint32_t> fresh;
+    fresh.resize(items);  // zeroed
+    dirty = std::move(fresh);
+    backend.parallel_for(v.total, VertexRepairPass{g.view, v.cell.data(), v.positions.data(), flag.data(), dirty.data(),
+                                                   round >= kRepairSnapRound, tally.data() + kTallyVertexMoves});
+    stats.repair_rounds = uint32_t(round + 1);
+  }
+  stats.repaired_vertex_moves = backend.to_host(tally, kTallyVertexMoves);
+  budget.release((v.total + items) * sizeof(uint32_t));
+  return Status::Ok();
+}
+
 // 7. Normals: averaged with the neighbouring vertices within options.smooth_angle (none at 0).
 template <class Backend>
 void smooth_normals(Backend& backend, const MeshingOptions& options, const SparseGridArrays<Backend>& g,
@@ -453,6 +490,8 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   typename Backend::template Array<uvec3> triangles;
   detail::make_faces(backend, g, e, v, triangles);
   stats.seconds.faces = clock.lap();
+  if (Status s = detail::repair_self_intersections(backend, options, budget, g, v, triangles, stats); !s.ok()) return s;
+  stats.seconds.repair = clock.lap();
   detail::smooth_normals(backend, options, g, v);
   stats.seconds.smoothing = clock.lap();
   detail::write_indexed_mesh(backend, v, triangles, out, stats);

@@ -3,6 +3,7 @@
 // vertex offsets. Host-and-device.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "gwnrt/base/hd.h"
@@ -28,8 +29,10 @@ struct MeshGrid {
   int32_t cells[3] = {0, 0, 0};
   int32_t blocks[3] = {0, 0, 0};
 
+  // One rounding (an explicit fma), so that every caller gets the same floats whether or not the
+  // compiler contracts: the repair's cell containment compares positions with them.
   GWNRT_HD vec3 corner_position(const GridCoord& c) const {
-    return {origin.x + cell * float(c.x), origin.y + cell * float(c.y), origin.z + cell * float(c.z)};
+    return {fmaf(cell, float(c.x), origin.x), fmaf(cell, float(c.y), origin.y), fmaf(cell, float(c.z), origin.z)};
   }
   GWNRT_HD uint64_t block_count() const { return uint64_t(blocks[0]) * uint64_t(blocks[1]) * uint64_t(blocks[2]); }
   GWNRT_HD uint64_t block_index(int32_t bx, int32_t by, int32_t bz) const {
