@@ -15,10 +15,12 @@
 #define GWNRT_HD __host__ __device__
 #define GWNRT_PASS __device__
 #define GWNRT_FORCEINLINE __forceinline__
+#define GWNRT_NOINLINE __noinline__
 #else
 #define GWNRT_HD
 #define GWNRT_PASS
 #define GWNRT_FORCEINLINE inline __attribute__((always_inline))
+#define GWNRT_NOINLINE __attribute__((noinline))
 #endif
 
 // GLM recognises nvcc on its own and marks its functions __host__ __device__.

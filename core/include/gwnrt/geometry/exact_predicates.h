@@ -168,7 +168,8 @@ GWNRT_HD inline int cross_term(const Diff& a, const Diff& b, const Diff& c, cons
 
 }  // namespace detail
 
-GWNRT_HD inline int orient2d_expansion(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c) {
+// Out of line: the rare exact path keeps its kilobytes of buffers out of its callers' frames.
+GWNRT_HD GWNRT_NOINLINE inline int orient2d_expansion(const glm::vec2& a, const glm::vec2& b, const glm::vec2& c) {
   const detail::Diff ux = detail::diff(b.x, a.x), uy = detail::diff(b.y, a.y), vx = detail::diff(c.x, a.x),
                      vy = detail::diff(c.y, a.y);
   double det[16];
@@ -185,7 +186,7 @@ GWNRT_HD inline int orient2d(const glm::vec2& a, const glm::vec2& b, const glm::
   return orient2d_expansion(a, b, c);
 }
 
-GWNRT_HD inline int orient3d_expansion(const vec3& a, const vec3& b, const vec3& c, const vec3& d) {
+GWNRT_HD GWNRT_NOINLINE inline int orient3d_expansion(const vec3& a, const vec3& b, const vec3& c, const vec3& d) {
   const detail::Diff ux = detail::diff(b.x, a.x), uy = detail::diff(b.y, a.y), uz = detail::diff(b.z, a.z);
   const detail::Diff vx = detail::diff(c.x, a.x), vy = detail::diff(c.y, a.y), vz = detail::diff(c.z, a.z);
   const detail::Diff wx = detail::diff(d.x, a.x), wy = detail::diff(d.y, a.y), wz = detail::diff(d.z, a.z);
@@ -365,10 +366,11 @@ GWNRT_HD inline bool edge_line_separates(const Triangle& t, const PlaneFilter& t
   const dvec3 n = glm::abs(t_plane.normal);
   const int k = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);
   if (!(n[k] > 8.0 * kEpsilon * t_plane.magnitude[k])) return false;  // not surely injective
+  // The projection's orientation (the normal's component, whose sign is certain) puts each
+  // third vertex on this side of its edge.
+  const int s = t_plane.normal[k] > 0.0 ? 1 : -1;
   for (int e = 0; e < 3; ++e) {
     const int f = (e + 1) % 3;
-    const int s = orient2d_filtered(t[e], t[f], t[(e + 2) % 3], k);
-    if (s != 1 && s != -1) continue;
     bool separated = true;
     for (int j = 0; j < 3 && separated; ++j)
       if (u_match[j] != e && u_match[j] != f) separated = orient2d_filtered(t[e], t[f], u[j], k) == -s;
@@ -402,8 +404,8 @@ GWNRT_HD inline bool apart_beyond_shared(const Triangle& p, const PlaneFilter& f
   if (shared == 3) return false;
   // Sharing an edge, one unshared vertex off the other's plane is enough (they then meet only in
   // the line of the edge).
-  if (detail::off_plane(q, q_shared, fp) || (shared < 2 && detail::off_plane(p, p_shared, fq))) return true;
-  return detail::edge_line_separates(p, fp, q, q_match) || detail::edge_line_separates(q, fq, p, p_match);
+  if (detail::off_plane(q, q_shared, fp) || detail::edge_line_separates(p, fp, q, q_match)) return true;
+  return (shared < 2 && detail::off_plane(p, p_shared, fq)) || detail::edge_line_separates(q, fq, p, p_match);
 }
 
 // The same, matching vertices by equal positions.
