@@ -219,6 +219,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   if (Status s = build_wide_bvh(bounds, 4, bvh); !s.ok()) return s;
   // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
   std::vector<exact::Triangle> tri(n);
+  std::vector<exact::PlaneFilter> plane(n);
   std::vector<Aabb> box(n);
   std::vector<uint32_t> input(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
@@ -226,6 +227,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
     input[i] = ids[b];
     box[i] = bounds[b];
     for (int k = 0; k < 3; ++k) tri[i][k] = pos[mesh.triangles[ids[b]][k]];
+    plane[i] = exact::PlaneFilter(tri[i]);
   });
 
   // Per node and lane, one past the last leaf-order primitive below it (leaves below a lane are
@@ -273,7 +275,9 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
           // Each unordered pair once: the later one in leaf order is tested from the earlier.
           const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
           for (size_t j = first; j < last; ++j) {
-            if (!q.overlaps(box[j]) || !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j])) continue;
+            if (!q.overlaps(box[j]) || exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j]) ||
+                !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
+              continue;
             ++local;
             if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
           }
