@@ -420,6 +420,44 @@ TEST(CrossingWinding, ClosedMeshHasZeroGradientAndHessianAndWholeNumbers) {
   }
 }
 
+// w by `auto` (whichever method it takes on each) within 2e-3 of the double brute force at
+// points off M, on the real meshes of data/realworld: the scan with its hundreds of holes, the
+// STL soups (welded by position as they are read), the inside-out and coloured ones.
+TEST(CrossingWinding, AutoMatchesBruteForceOnRealMeshes) {
+  for (const char* name :
+       {"realworld/birdBath_ggg_photogrammetry.obj", "realworld/dolphins_colored.ply",
+        "realworld/spot_triangulated.obj", "realworld/kuka_kr10r1100sixx_visual_base_link.stl",
+        "realworld/kuka_kr150r3100_2_visual_base_link.stl", "realworld/motoman_motomini_visual_link_1_s.stl"}) {
+    const Mesh mesh = load_test_mesh(name);
+    const reference::ReferenceMesh ref = reference::reference_mesh(mesh);
+    const Aabb box = test::mesh_bounds(mesh);
+    // About 5e7 brute-force triangle terms a mesh (fewer points on the larger ones; a quarter of
+    // them under AddressSanitizer, which looks for memory errors, not differences).
+    const size_t terms = test::kAddressSanitizer ? 12500000 : 50000000;
+    const size_t count = std::clamp<size_t>(terms / mesh.triangles.size(), 100, 1500);
+    const GwnModel model = build_model(Mesh(mesh));
+    const ModelView v = model.view();
+    const std::vector<vec3> points = test::sample_points(box, count, 17);
+    std::vector<double> error(points.size(), -1.0);
+    reference::parallel_over(points.size(), [&](size_t i) {
+      if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
+      const double w = evaluate_winding(v, points[i], WindingOptions{}).w;
+      error[i] = std::fabs(w - reference::reference_w(ref, dvec3(points[i])));
+    });
+    size_t compared = 0;
+    double max_error = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (error[i] < 0) continue;
+      ++compared;
+      max_error = std::max(max_error, error[i]);
+      EXPECT_LE(error[i], 2e-3) << name << ": point " << i;
+    }
+    EXPECT_GT(compared, count * 9 / 10) << name;
+    std::printf("[ %-26.26s ] %s: max |dw| %.2e over %zu points\n", name,
+                winding_method_name(resolve_winding_method(v, WindingMethod::kAuto)), max_error, compared);
+  }
+}
+
 TEST(CrossingWinding, AutoPicksTaylorForAllBoundarySoupAndCrossingForSmallBoundary) {
   const GwnModel holes = build_model(load_test_mesh("bunny_holes.obj"));
   EXPECT_EQ(resolve_winding_method(holes.view(), WindingMethod::kAuto), WindingMethod::kCrossing);
