@@ -159,6 +159,10 @@ int main(int argc, char** argv) {
                  "Average vertex normals with neighbours within this angle in degrees (0: off)")
       ->capture_default_str();
   app.add_flag("--soup", options.soup, "Write a triangle soup (three vertices of its own per triangle)");
+  bool no_repair = false;
+  app.add_flag("--no-repair", no_repair,
+               "Leave the vertices where dual contouring puts them: skip the exact search for intersecting "
+               "triangles and their repair (faster; the output may then intersect itself)");
   app.add_option("--attributes", attributes, "Per-vertex attributes to carry from the input: source,uv,color");
   app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::positive_number());
   app.add_option("--device", device, gwnrt::apps::kDeviceHelp)
@@ -174,6 +178,7 @@ int main(int argc, char** argv) {
 
   if (resolution) options.resolution = *resolution;
   if (cell_size) options.cell_size = *cell_size;
+  options.repair_self_intersections = !no_repair;
   if (cell_size && !(*cell_size > 0.0f)) return fail(kProgram, "--cell-size must be a number > 0");
   if (resolution && *resolution == 0) return fail(kProgram, "--resolution must be at least 1");
   (void)gwnrt::meshing_method_named(method, options.method);  // --method's check took only these names

@@ -7,6 +7,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "cli_util.h"
 #include "gwnrt/io/mesh_io.h"
@@ -220,6 +221,30 @@ TEST_F(MeshCliTest, MeshesAnStlSoupIntoAnStl) {
       test::run_program(binary_, test::quote(stl) + " -o " + test::quote(out) + " --weld-tolerance 0.5");
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.err.find("--weld-tolerance"), std::string::npos) << refused.err;
+}
+
+// The repair, as the report and -v see it: the output of a CAD part at 64³ has no intersecting
+// triangles, the unrepaired one (--no-repair) has the pairs the repair said it found.
+TEST_F(MeshCliTest, RepairsIntersectingTrianglesUnlessAskedNotTo) {
+  const std::string stl = test::quote(test::data_path("realworld/motoman_motomini_visual_link_1_s.stl"));
+  const std::string out = test::quote(test::temp_path("motoman_mesh.ply"));
+  const auto run = [&](const std::string& extra) {
+    const std::string json = test::temp_path("motoman_report.json");
+    const test::RunResult r =
+        test::run_program(binary_, stl + " -o " + out + " --resolution 64 --report-json " + test::quote(json) + extra);
+    EXPECT_TRUE(r.exited && r.exit_code == 0) << r.err;
+    std::ifstream in(json);
+    return nlohmann::json::parse(in, nullptr, false);
+  };
+  const nlohmann::json repaired = run(""), raw = run(" --no-repair");
+  ASSERT_FALSE(repaired.is_discarded() || raw.is_discarded());
+  EXPECT_EQ(repaired["self_intersections"], 0u);
+  EXPECT_GT(uint64_t(repaired["repair"]["pairs_found"]), 0u);
+  EXPECT_GT(uint64_t(repaired["repair"]["vertex_moves"]), 0u);
+  EXPECT_EQ(repaired["repair"]["pairs_left"], 0u);
+  EXPECT_EQ(raw["self_intersections"], repaired["repair"]["pairs_found"]);
+  EXPECT_EQ(raw["repair"]["rounds"], 0u);
+  EXPECT_EQ(raw["triangles"], repaired["triangles"]);
 }
 
 }  // namespace

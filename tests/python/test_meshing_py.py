@@ -49,6 +49,9 @@ def test_extract_surface_is_closed_and_well_formed(surface):
     np.testing.assert_allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-5)
     assert mesh.uvs is None and mesh.colors is None
     assert mesh.stats["message"] == "" and mesh.stats["cell_size"] > 0
+    # The repair's counts: whatever it found, nothing is left.
+    assert mesh.stats["self_intersections_left"] == 0
+    assert mesh.stats["repaired_vertex_moves"] >= 0 and mesh.stats["repair_rounds"] >= 0
 
 
 def test_extract_surface_lies_on_the_input(surface):
