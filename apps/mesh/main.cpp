@@ -89,8 +89,13 @@ nlohmann::json report_json(const gwnrt::MeshingStats& stats, const gwnrt::MeshQu
                          {"to_surface", d.seconds_to_surface},
                          {"from_surface", d.seconds_from_surface}};
   j["memory"] = {{"pipeline_bytes", stats.bytes}, {"peak_resident_bytes", peak_memory_bytes()}};
-  j["edges"] = {{"crossing", stats.crossing_edges}, {"sheet", stats.sheet_edges},   {"smooth", stats.smooth_edges},
-                {"fallback", stats.fallback_edges}, {"capped", stats.capped_edges}, {"open", stats.open_edges}};
+  j["edges"] = {{"crossing", stats.crossing_edges},
+                {"sheet", stats.sheet_edges},
+                {"smooth", stats.smooth_edges},
+                {"fallback", stats.fallback_edges},
+                {"capped", stats.capped_edges},
+                {"open", stats.open_edges},
+                {"rescouted_open", stats.rescouted_open_edges}};
   j["blocks"] = {{"active", stats.active_blocks}, {"evaluated", stats.evaluated_blocks}};
   j["multi_component_cells"] = stats.multi_component_cells;
   j["repair"] = {{"pairs_found", stats.self_intersections_repaired},

@@ -38,6 +38,7 @@ py::dict stats_dict(const MeshingStats& s) {
   d["capped_edges"] = s.capped_edges;
   d["multi_component_cells"] = s.multi_component_cells;
   d["open_edges"] = s.open_edges;
+  d["rescouted_open_edges"] = s.rescouted_open_edges;
   d["self_intersections_repaired"] = s.self_intersections_repaired;
   d["repair_rounds"] = s.repair_rounds;
   d["repaired_vertex_moves"] = s.repaired_vertex_moves;

@@ -137,5 +137,43 @@ TEST(RealMeshes, RepairIsWhatRemovesTheIntersections) {
   EXPECT_LE(moved, with.repaired_vertex_moves);
 }
 
+// An assembly of two intersecting boxes: the top face of the first is cut by the second, and its
+// two triangles' centroids lie inside the second (so neither is a sheet) while the strip of the
+// face outside it is part of S. Scouted by the sheets alone, blocks S passes through were
+// dropped at 256 and the output had holes; the mesher meshes again scouted by the distance to M.
+TEST(RealMeshes, IntersectingPartsCloseWhereTheSheetsMissS) {
+  Mesh mesh;
+  const auto add_box = [&](const vec3& lo, const vec3& hi) {
+    const uint32_t b = uint32_t(mesh.positions.size());
+    for (int i = 0; i < 8; ++i)
+      mesh.positions.push_back(vec3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
+    const uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : faces) {
+      mesh.triangles.push_back({b + f[0], b + f[1], b + f[2]});
+      mesh.triangles.push_back({b + f[0], b + f[2], b + f[3]});
+    }
+  };
+  add_box(vec3(0.0f), vec3(1.0f));
+  add_box(vec3(0.3f, -1.0f, 0.5f), vec3(2.0f));
+  const GwnModel model = test::build_model(std::move(mesh));
+  SurfaceMesh out;
+  MeshingStats stats;
+  ASSERT_TRUE(extract_surface(model, options_at(256), out, &stats).ok());
+  EXPECT_GT(stats.rescouted_open_edges, 0u);
+  EXPECT_EQ(stats.open_edges, 0u);
+  MeshTopology topology;
+  ASSERT_TRUE(mesh_topology(out, topology).ok());
+  EXPECT_TRUE(topology.closed_manifold()) << topology.boundary_edges << " boundary edges";
+  uint64_t pairs = ~uint64_t(0);
+  ASSERT_TRUE(count_self_intersections(out, pairs).ok());
+  EXPECT_EQ(pairs, 0u);
+  // The union's volume: 1 + 1.7·3·1.5 − 0.7·1·0.5, within a cell's layer of the surface.
+  double volume = 0;
+  for (const uvec3& t : out.triangles)
+    volume += glm::dot(dvec3(out.positions[t.x]), glm::cross(dvec3(out.positions[t.y]), dvec3(out.positions[t.z]))) / 6;
+  const double expected = 1.0 + 1.7 * 3.0 * 1.5 - 0.7 * 1.0 * 0.5;
+  EXPECT_NEAR(volume, expected, 0.01 * expected);
+}
+
 }  // namespace
 }  // namespace gwnrt

@@ -89,7 +89,10 @@ struct MeshingStats {
   uint64_t sheet_edges = 0, smooth_edges = 0, fallback_edges = 0, capped_edges = 0;
   uint64_t multi_component_cells = 0;  // cells with two or more vertices
   uint64_t open_edges = 0;  // sign-changing edges whose four cells were not all active (0 unless a bound failed)
-  uint64_t bytes = 0;       // the pipeline's largest arrays together, at their peak
+  // Open edges of a first meshing scouted by the sheets, after which S was meshed again scouted
+  // by the distance to M (the sheets miss the parts of triangles that other triangles cut).
+  uint64_t rescouted_open_edges = 0;
+  uint64_t bytes = 0;  // the pipeline's largest arrays together, at their peak
   // The repair: intersecting pairs found before it, rounds run, vertex moves, and pairs left
   // after its last round (0 unless it ran out of rounds).
   uint64_t self_intersections_repaired = 0;

@@ -444,14 +444,10 @@ void write_indexed_mesh(Backend& backend, VertexArrays<Backend>& v,
   stats.open_edges = (n - face_total) / 2;
 }
 
-}  // namespace detail
-
-// Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
-// which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats. Marching
-// cubes (options.method) shares the steps up to the edges.
+// One meshing of S with this scout: the steps above in order.
 template <class Backend>
-Status run_dual_contouring(Backend& backend, const ModelView& model, const MeshingOptions& options,
-                           const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
+Status contour(Backend& backend, const ModelView& model, const MeshingOptions& options, const MeshGrid& grid,
+               const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
   detail::PassClock clock;
   detail::MemoryBudget budget(grid, options.memory_budget, stats);
   // The block map (needed_dense, is_slot and slot_of_block) has three words a block of the grid,
@@ -497,6 +493,33 @@ Status run_dual_contouring(Backend& backend, const ModelView& model, const Meshi
   detail::write_indexed_mesh(backend, v, triangles, out, stats);
   stats.seconds.output = clock.lap();
   return Status::Ok();
+}
+
+}  // namespace detail
+
+// Dual contouring of S on `grid` (its cells and blocks set, its arrays not yet). `scout` decides
+// which blocks S may meet. Fills out (positions, normals, triangles; indexed) and stats. Marching
+// cubes (options.method) shares the steps up to the edges. Scouting by the sheets trusts each
+// triangle's classification at its centroid, but a triangle that other triangles cut (the
+// intersecting parts of an assembly) can carry S on one side of the cut and not the other; when
+// an edge S crosses is then left without its cells, S is meshed again with the scout bounded by
+// the distance to M, which holds everywhere (MeshingStats::rescouted_open_edges).
+template <class Backend>
+Status run_dual_contouring(Backend& backend, const ModelView& model, const MeshingOptions& options,
+                           const MeshGrid& grid, const ScoutQuery& scout, SurfaceMesh& out, MeshingStats& stats) {
+  const MeshingStats planned = stats;
+  const Status first = detail::contour(backend, model, options, grid, scout, out, stats);
+  if (!first.ok() || stats.open_edges == 0 || !scout.use_sheets) return first;
+  const uint64_t open = stats.open_edges;
+  const double first_seconds = stats.seconds.total();
+  ScoutQuery by_mesh = scout;
+  by_mesh.use_sheets = false;
+  stats = planned;
+  out = SurfaceMesh{};
+  const Status again = detail::contour(backend, model, options, grid, by_mesh, out, stats);
+  stats.rescouted_open_edges = open;
+  stats.seconds.scout += first_seconds;  // the first meshing is part of the cost
+  return again;
 }
 
 }  // namespace gwnrt
