@@ -78,13 +78,14 @@ GWNRT_HD inline void two_product(double a, double b, double& x, double& y) {
 
 constexpr int kMaxComponents = 192;  // orient3d: 3 terms × 2 × (2 × (2 × 2 × 2 + 2 × 2 × 2))
 
-// h = e + f (Shewchuk's fast expansion sum: merge by magnitude, then one chain of two-sums).
-GWNRT_HD inline int sum(const double* e, int ne, const double* f, int nf, double* h) {
+// h = e + f_sign·f, f_sign ±1 (Shewchuk's fast expansion sum: merge by magnitude, then one
+// chain of two-sums).
+GWNRT_HD inline int sum(const double* e, int ne, const double* f, int nf, double* h, double f_sign = 1.0) {
   double g[kMaxComponents];
   int m = 0, i = 0, j = 0;
-  while (i < ne && j < nf) g[m++] = fabs(e[i]) <= fabs(f[j]) ? e[i++] : f[j++];
+  while (i < ne && j < nf) g[m++] = fabs(e[i]) <= fabs(f[j]) ? e[i++] : f_sign * f[j++];
   while (i < ne) g[m++] = e[i++];
-  while (j < nf) g[m++] = f[j++];
+  while (j < nf) g[m++] = f_sign * f[j++];
   if (m == 0) return 0;
   if (m == 1) {
     h[0] = g[0];
@@ -136,9 +137,7 @@ GWNRT_HD inline int product(const double* e, int ne, const double* f, int nf, do
 
 // h = e − f.
 GWNRT_HD inline int difference(const double* e, int ne, const double* f, int nf, double* h) {
-  double neg[kMaxComponents];
-  for (int i = 0; i < nf; ++i) neg[i] = -f[i];
-  return sum(e, ne, neg, nf, h);
+  return sum(e, ne, f, nf, h, -1.0);
 }
 
 GWNRT_HD inline int sign_of(const double* e, int n) { return n == 0 ? 0 : (e[n - 1] > 0 ? 1 : -1); }
