@@ -411,6 +411,11 @@ GWNRT_HD inline uint32_t edge_index(const SparseGridView& view, const GridCoord&
   return view.edge_offset[item] + uint32_t(bit_count(mask & ((1u << axis) - 1u)));
 }
 
+// The index of edge e (cell_topology.h's numbering) of `cell`, or kEmptyLane.
+GWNRT_HD inline uint32_t cell_edge_index(const SparseGridView& view, const GridCoord& cell, int e) {
+  return edge_index(view, cell_corner(cell, edge_corner(e)), edge_axis(e));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Cells.
 
@@ -519,9 +524,7 @@ struct CellVertexPass {
     dvec3 box_lo[4] = {dvec3(1.0), dvec3(1.0), dvec3(1.0), dvec3(1.0)},
           box_hi[4] = {dvec3(0.0), dvec3(0.0), dvec3(0.0), dvec3(0.0)};
     for (int e = 0; e < kCellEdges; ++e) {
-      const int corner = edge_corner(e);
-      const uint32_t k = edge_index(
-          view, {cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)}, edge_axis(e));
+      const uint32_t k = cell_edge_index(view, cell, e);
       if (k == kEmptyLane) continue;
       const HermitePoint& h = hermite[k];
       const int c = packed_component(parts, e);
@@ -670,9 +673,6 @@ GWNRT_HD inline GridCoord pair_cell(const GridCoord& a, const GridCoord& b) {
 inline constexpr int kRepairRounds = 6;
 // Rounds before this one move a vertex half way to its safe point; from it on, onto it.
 inline constexpr int kRepairSnapRound = 2;
-// Counters of the repair (MeshingStats): pairs found in the first round, pairs left after the
-// last, vertex moves.
-enum RepairTally : int { kTallyPairsFound = 0, kTallyPairsLeft = 1, kTallyVertexMoves = 2, kRepairTallies = 3 };
 
 // Per cell with vertices (run over the vertices: the cell's first vertex does it) whose `dirty`
 // flag is set (every such cell when dirty is null): the pairs of triangles of its edges' quads
@@ -695,11 +695,11 @@ struct SelfIntersectionPass {
     GridCoord low[kMax];
     exact::Triangle tri[kMax];
     exact::PlaneFilter plane[kMax];
-    vec3 box_lo[kMax], box_hi[kMax];
+    Aabb box[kMax];
     int n = 0;
     for (int e = 0; e < kCellEdges; ++e) {
-      const int corner = edge_corner(e), axis = edge_axis(e);
-      const GridCoord c{cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)};
+      const int axis = edge_axis(e);
+      const GridCoord c = cell_corner(cell, edge_corner(e));
       const uint32_t k = edge_index(view, c, axis);
       if (k == kEmptyLane) continue;
       for (uint32_t t = 2 * k; t < 2 * k + 2; ++t) {
@@ -708,8 +708,8 @@ struct SelfIntersectionPass {
         id[n] = t;
         low[n] = edge_lowest_cell(c, axis);
         for (int j = 0; j < 3; ++j) tri[n][j] = positions[v[j]];
-        box_lo[n] = glm::min(tri[n][0], glm::min(tri[n][1], tri[n][2]));
-        box_hi[n] = glm::max(tri[n][0], glm::max(tri[n][1], tri[n][2]));
+        box[n] = {glm::min(tri[n][0], glm::min(tri[n][1], tri[n][2])),
+                  glm::max(tri[n][0], glm::max(tri[n][1], tri[n][2]))};
         plane[n] = exact::PlaneFilter(tri[n]);
         // A zero-area triangle meets nothing by the pair test's rule.
         if (plane[n].certainly_nonzero_area() || !exact::collinear(tri[n][0], tri[n][1], tri[n][2])) ++n;
@@ -720,10 +720,7 @@ struct SelfIntersectionPass {
       for (int j = i + 1; j < n; ++j) {
         const GridCoord at = pair_cell(low[i], low[j]);
         if (at.x != cell.x || at.y != cell.y || at.z != cell.z) continue;
-        const bool boxes_meet = box_lo[i].x <= box_hi[j].x && box_lo[j].x <= box_hi[i].x &&
-                                box_lo[i].y <= box_hi[j].y && box_lo[j].y <= box_hi[i].y &&
-                                box_lo[i].z <= box_hi[j].z && box_lo[j].z <= box_hi[i].z;
-        if (!boxes_meet) continue;
+        if (!box[i].overlaps(box[j])) continue;
         // Shared vertices by index (the filter stays safe for distinct vertices that coincide).
         const uvec3 a = triangles[id[i]], b = triangles[id[j]];
         int match[3];
@@ -747,8 +744,7 @@ GWNRT_HD inline vec3 component_safe_point(const SparseGridView& view, const Grid
   int count = 0;
   for (int e = 0; e < kCellEdges; ++e) {
     const int corner = edge_corner(e), axis = edge_axis(e);
-    const GridCoord c{cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)};
-    if (edge_index(view, c, axis) == kEmptyLane || packed_component(parts, e) != component) continue;
+    if (cell_edge_index(view, cell, e) == kEmptyLane || packed_component(parts, e) != component) continue;
     vec3 mid(float(corner & 1), float((corner >> 1) & 1), float((corner >> 2) & 1));
     mid[axis] = 0.5f;
     sum += mid;
@@ -855,9 +851,7 @@ struct MarchingFacePass {
       uint32_t v[kCellEdges];
       bool complete = true;
       for (int k = 0; k < loops.length[l]; ++k) {
-        const int e = loops.edge[first + k], corner = edge_corner(e);
-        v[k] = edge_index(view, {cell.x + (corner & 1), cell.y + ((corner >> 1) & 1), cell.z + ((corner >> 2) & 1)},
-                          edge_axis(e));
+        v[k] = cell_edge_index(view, cell, loops.edge[first + k]);
         complete = complete && v[k] != kEmptyLane;
       }
       for (int k = 1; k + 1 < loops.length[l]; ++k)

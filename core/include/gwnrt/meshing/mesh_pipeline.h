@@ -245,7 +245,7 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     const GridCoord* b = kept.data();
     backend.parallel_for(kept.size(), [=] GWNRT_PASS(uint64_t i) {
       for (int d = 0; d < 8; ++d) {
-        const GridCoord t{b[i].x + (d & 1), b[i].y + ((d >> 1) & 1), b[i].z + ((d >> 2) & 1)};
+        const GridCoord t = cell_corner(b[i], d);
         if (t.x < grid.blocks[0] && t.y < grid.blocks[1] && t.z < grid.blocks[2])
           atomic_or(needed + grid.block_index(t.x, t.y, t.z), 1u << d);
       }
@@ -390,9 +390,9 @@ Status repair_self_intersections(Backend& backend, const MeshingOptions& options
   const uint64_t items = g.slots * kBlockItems;
   if (Status s = budget.reserve((v.total + items) * sizeof(uint32_t), "the repair's flags"); !s.ok()) return s;
   typename Backend::template Array<uint32_t> flag, dirty;
-  flag.resize(v.total);  // zeroed
-  typename Backend::template Array<unsigned long long> tally;
-  tally.resize(kRepairTallies);
+  flag.resize(v.total);                                        // zeroed
+  typename Backend::template Array<unsigned long long> moves;  // VertexRepairPass's count, zeroed
+  moves.resize(1);
   for (int round = 0;; ++round) {
     typename Backend::template Array<unsigned long long> pairs;
     pairs.resize(1);
@@ -408,10 +408,10 @@ Status repair_self_intersections(Backend& backend, const MeshingOptions& options
     fresh.resize(items);  // zeroed
     dirty = std::move(fresh);
     backend.parallel_for(v.total, VertexRepairPass{g.view, v.cell.data(), v.positions.data(), flag.data(), dirty.data(),
-                                                   round >= kRepairSnapRound, tally.data() + kTallyVertexMoves});
+                                                   round >= kRepairSnapRound, moves.data()});
     stats.repair_rounds = uint32_t(round + 1);
   }
-  stats.repaired_vertex_moves = backend.to_host(tally, kTallyVertexMoves);
+  stats.repaired_vertex_moves = backend.to_host(moves, 0);
   budget.release((v.total + items) * sizeof(uint32_t));
   return Status::Ok();
 }

@@ -48,6 +48,11 @@ struct MeshGrid {
   }
 };
 
+// Corner k of the cell whose lowest corner is c: offset (k & 1, (k >> 1) & 1, k >> 2).
+GWNRT_HD inline GridCoord cell_corner(const GridCoord& c, int k) {
+  return {c.x + (k & 1), c.y + ((k >> 1) & 1), c.z + ((k >> 2) & 1)};
+}
+
 GWNRT_HD inline uint32_t local_index(const GridCoord& c) {
   return uint32_t(c.x % kBlockCells) +
          kBlockCells * (uint32_t(c.y % kBlockCells) + kBlockCells * uint32_t(c.z % kBlockCells));
@@ -110,8 +115,7 @@ struct SparseGridView {
         f[k] = corner_value[item + (k & 1) + kBlockCells * ((k >> 1) & 1) + kBlockCells * kBlockCells * (k >> 2)];
       return;
     }
-    for (int k = 0; k < kCellCorners; ++k)
-      f[k] = corner_value_at({cell.x + (k & 1), cell.y + ((k >> 1) & 1), cell.z + ((k >> 2) & 1)});
+    for (int k = 0; k < kCellCorners; ++k) f[k] = corner_value_at(cell_corner(cell, k));
   }
 };
 
