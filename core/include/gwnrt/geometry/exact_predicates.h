@@ -323,11 +323,12 @@ struct PlaneFilter {
     if (det < -bound) return -1;
     return bound == 0 ? 0 : kUndecided;
   }
-  // Whether the triangle certainly has non-zero area: a component of n beyond its error bound.
+  // Whether component k of n (the orientation of the projection dropping axis k) is certainly
+  // non-zero, its sign then certain: beyond its error bound.
+  GWNRT_HD bool certain_component(int k) const { return fabs(normal[k]) > 8.0 * kEpsilon * magnitude[k]; }
+  // Whether the triangle certainly has non-zero area: some component of n certainly non-zero.
   GWNRT_HD bool certainly_nonzero_area() const {
-    for (int k = 0; k < 3; ++k)
-      if (fabs(normal[k]) > 8.0 * kEpsilon * magnitude[k]) return true;
-    return false;
+    return certain_component(0) || certain_component(1) || certain_component(2);
   }
 };
 
@@ -364,7 +365,7 @@ GWNRT_HD inline bool edge_line_separates(const Triangle& t, const PlaneFilter& t
                                          const int* u_match) {
   const dvec3 n = glm::abs(t_plane.normal);
   const int k = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);
-  if (!(n[k] > 8.0 * kEpsilon * t_plane.magnitude[k])) return false;  // not surely injective
+  if (!t_plane.certain_component(k)) return false;  // not surely injective
   // The projection's orientation (the normal's component, whose sign is certain) puts each
   // third vertex on this side of its edge.
   const int s = t_plane.normal[k] > 0.0 ? 1 : -1;
