@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -273,16 +274,40 @@ TEST(Phase, HalfAngleSumMatchesAtan2Sum) {
 // 3. The bounds of sample_phase on open meshes
 // ---------------------------------------------------------------------------------------------
 
+using SegmentKey = std::array<float, 6>;
+SegmentKey segment_key(const vec3& a, const vec3& b) { return {a.x, a.y, a.z, b.x, b.y, b.z}; }
+
+// Per leaf-order cone triangle, the length of the segment of ∂M it carries: its edge 1 -> 2 when
+// that is a segment of the curve (by exact position), else 0 (an inner triangle of a spanned loop,
+// whose edges are spokes between apexes).
+std::vector<double> carried_lengths(const GwnModel& model) {
+  const BoundaryCurve& curve = model.boundary();
+  const std::vector<vec3>& cone = model.cone_tree().vertices;
+  std::set<SegmentKey> segments;
+  for (size_t s = 0; s < curve.segment_count(); ++s)
+    segments.insert(segment_key(curve.endpoints[2 * s], curve.endpoints[2 * s + 1]));
+  std::vector<double> out(cone.size() / 3, 0.0);
+  for (size_t t = 0; t < out.size(); ++t)
+    if (segments.count(segment_key(cone[3 * t + 1], cone[3 * t + 2])))
+      out[t] = glm::length(dvec3(cone[3 * t + 2]) - dvec3(cone[3 * t + 1]));
+  return out;
+}
+
 // What the tracer reads off the cone's tree: each triangle's segment length (rounded up) and
-// 1/length², and per lane the length of ∂M below it (rounded up, never short), against double
-// sums over the triangles' edges 1 -> 2.
+// 1/length² (0 for an inner triangle), and per lane the length of ∂M below it (rounded up, never
+// short), against double sums over the carried segments.
 void check_cone_lengths(const GwnModel& model) {
   const BoundaryCurve& curve = model.boundary();
   const std::vector<vec3>& cone = model.cone_tree().vertices;
   const std::span<const ConeSegment> segments = model.cone_segments();
+  const std::vector<double> carried = carried_lengths(model);
   ASSERT_EQ(segments.size(), cone.size() / 3);
   for (size_t t = 0; t < segments.size(); ++t) {
-    const double length = glm::length(dvec3(cone[3 * t + 2]) - dvec3(cone[3 * t + 1]));
+    const double length = carried[t];
+    if (length == 0.0) {
+      EXPECT_EQ(segments[t].length, 0.0f) << "inner cone triangle " << t;
+      continue;
+    }
     EXPECT_GE(double(segments[t].length), length);
     EXPECT_LE(double(segments[t].length), length * (1 + 3e-7));
     EXPECT_NEAR(double(segments[t].inverse_length2) * length * length, 1.0, 3e-7);
@@ -295,8 +320,7 @@ void check_cone_lengths(const GwnModel& model) {
     if (n.child[lane] == kEmptyLane) return 0.0;
     double total = 0;
     if (n.count[lane] > 0) {
-      for (uint32_t t = n.child[lane]; t < n.child[lane] + n.count[lane]; ++t)
-        total += glm::length(dvec3(cone[3 * t + 2]) - dvec3(cone[3 * t + 1]));
+      for (uint32_t t = n.child[lane]; t < n.child[lane] + n.count[lane]; ++t) total += carried[t];
     } else {
       for (int l = 0; l < kBvhWidth; ++l) total += self(self, n.child[lane], l);
     }
@@ -503,9 +527,6 @@ Mesh make_l_fan() {
   return m;
 }
 
-using SegmentKey = std::array<float, 6>;
-SegmentKey segment_key(const vec3& a, const vec3& b) { return {a.x, a.y, a.z, b.x, b.y, b.z}; }
-
 void check_cone_on(const char* name, const Mesh& mesh, bool expect_mean_on_a_segment_line, uint32_t seed) {
   SCOPED_TRACE(name);
   const GwnModel model = build_model(mesh);
@@ -535,36 +556,52 @@ void check_cone_on(const char* name, const Mesh& mesh, bool expect_mean_on_a_seg
     EXPECT_GE(collinear_with_mean, 4);
   }
 
-  // One cone triangle per segment, none dropped for zero area, each carrying its segment.
+  // Every segment carried by one cone triangle of non-zero area (none dropped); the other
+  // triangles are inner ones of spanned loops, which carry none.
   ASSERT_EQ(cone.size() % 3, 0u);
-  EXPECT_EQ(cone.size() / 3, curve.segment_count());
-  EXPECT_EQ(model.view().cone.triangle_count, curve.segment_count());
+  const std::vector<double> carried = carried_lengths(model);
   std::map<SegmentKey, int> unmatched;
   for (size_t s = 0; s < curve.segment_count(); ++s)
     ++unmatched[segment_key(curve.endpoints[2 * s], curve.endpoints[2 * s + 1])];
+  size_t carrying = 0;
   for (size_t t = 0; t < cone.size() / 3; ++t) {
+    if (carried[t] == 0.0) continue;
+    ++carrying;
     EXPECT_FALSE(is_degenerate_triangle(cone[3 * t], cone[3 * t + 1], cone[3 * t + 2])) << "cone triangle " << t;
     --unmatched[segment_key(cone[3 * t + 1], cone[3 * t + 2])];
   }
+  EXPECT_EQ(carrying, curve.segment_count());
   for (const auto& [key, n] : unmatched)
     EXPECT_EQ(n, 0) << "segment (" << key[0] << ", " << key[1] << ", " << key[2] << ") -> (" << key[3] << ", " << key[4]
                     << ", " << key[5] << ") carried by " << -n << " extra cone triangles";
-  // An apex moved off the lines stays near its loop's mean: at most 8 tries of 1e-3 of the
-  // loop's box diagonal each (boundary_cone), plus float rounding.
+  // An apex moved off the lines stays near its loop's mean (a fanned loop) or inside its loop's
+  // box (a spanned one: the group's mean): at most 8 tries of 1e-3 of the box diagonal (of the
+  // loop, or of the group, which is smaller) each (boundary_cone), plus float rounding.
   std::vector<Aabb> loop_box(loop_count);
+  std::vector<size_t> loop_segments(loop_count, 0);
   for (size_t s = 0; s < curve.segment_count(); ++s) {
     loop_box[loop[s]].extend(curve.endpoints[2 * s]);
     loop_box[loop[s]].extend(curve.endpoints[2 * s + 1]);
+    ++loop_segments[loop[s]];
   }
   for (size_t t = 0; t < cone.size() / 3; ++t) {
+    if (carried[t] == 0.0) continue;
     size_t s = 0;  // the segment the triangle carries, hence its loop
     while (s < curve.segment_count() && segment_key(curve.endpoints[2 * s], curve.endpoints[2 * s + 1]) !=
                                             segment_key(cone[3 * t + 1], cone[3 * t + 2]))
       ++s;
     ASSERT_LT(s, curve.segment_count());
-    const dvec3 mean = sum[loop[s]] / count[loop[s]];
-    const double size = glm::length(dvec3(loop_box[loop[s]].hi) - dvec3(loop_box[loop[s]].lo));
-    EXPECT_LE(glm::length(dvec3(cone[3 * t]) - mean), 8e-3 * size * (1 + 1e-5) + 1e-6 * size) << "cone triangle " << t;
+    const Aabb& box = loop_box[loop[s]];
+    const double size = glm::length(dvec3(box.hi) - dvec3(box.lo)), reach = 8e-3 * size * (1 + 1e-5) + 1e-6 * size;
+    if (loop_segments[loop[s]] <= kFannedLoopSegments) {
+      const dvec3 mean = sum[loop[s]] / count[loop[s]];
+      EXPECT_LE(glm::length(dvec3(cone[3 * t]) - mean), reach) << "cone triangle " << t;
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GE(double(cone[3 * t][k]), double(box.lo[k]) - reach) << "cone triangle " << t;
+        EXPECT_LE(double(cone[3 * t][k]), double(box.hi[k]) + reach) << "cone triangle " << t;
+      }
+    }
   }
 
   check_cone_lengths(model);

@@ -86,57 +86,6 @@ std::vector<uint32_t> boundary_loops(const BoundaryCurve& curve, uint32_t& loop_
   return loop;
 }
 
-Mesh boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count) {
-  Mesh cone;
-  const size_t n = curve.segment_count();
-  if (n == 0) return cone;
-  // One apex per loop, the mean of its endpoints: the fan then stays inside the loop's box
-  // (its convex hull), which is what bounds where smooth pieces can be.
-  std::vector<dvec3> sum(loop_count, dvec3(0.0));
-  std::vector<double> count(loop_count, 0.0);
-  for (size_t s = 0; s < n; ++s) {
-    sum[loop_of_segment[s]] += dvec3(curve.endpoints[2 * s]) + dvec3(curve.endpoints[2 * s + 1]);
-    count[loop_of_segment[s]] += 2;
-  }
-  std::vector<vec3> apex(loop_count);
-  for (uint32_t l = 0; l < loop_count; ++l) apex[l] = vec3(sum[l] / count[l]);
-  // A cone triangle whose apex lies on its segment's line has zero area and is left out of the
-  // tree, and the tracer reads ∂M off the tree's triangles (phase.h): the apex is moved off
-  // every such line. A loop lying on one line is the exception: its segments cancel (their
-  // field is zero), so nothing is lost with them.
-  std::vector<std::vector<uint32_t>> segments_of(loop_count);
-  for (uint32_t s = 0; s < n; ++s) segments_of[loop_of_segment[s]].push_back(s);
-  for (uint32_t l = 0; l < loop_count; ++l) {
-    const std::vector<uint32_t>& seg = segments_of[l];
-    const vec3 a0 = curve.endpoints[2 * seg[0]], b0 = curve.endpoints[2 * seg[0] + 1];
-    Aabb box;
-    bool on_one_line = true;
-    for (uint32_t s : seg)
-      for (int k = 0; k < 2; ++k) {
-        box.extend(curve.endpoints[2 * s + k]);
-        on_one_line = on_one_line && is_degenerate_triangle(a0, b0, curve.endpoints[2 * s + k]);
-      }
-    if (on_one_line) continue;
-    auto collinear = [&](const vec3& z) {
-      for (uint32_t s : seg)
-        if (is_degenerate_triangle(z, curve.endpoints[2 * s], curve.endpoints[2 * s + 1])) return true;
-      return false;
-    };
-    const float size = glm::length(box.hi - box.lo);
-    for (int attempt = 1; attempt <= 8 && collinear(apex[l]); ++attempt) {
-      // Directions far from any axis, so that grid-aligned loops cannot keep the apex on a line.
-      const vec3 direction = glm::normalize(vec3(0.5773f, 0.6172f + 0.1f * attempt, 0.5345f - 0.07f * attempt));
-      apex[l] = vec3(sum[l] / count[l]) + (1e-3f * float(attempt) * size) * direction;
-    }
-  }
-  cone.positions.reserve(2 * n + loop_count);
-  cone.positions.insert(cone.positions.end(), curve.endpoints.begin(), curve.endpoints.end());
-  cone.positions.insert(cone.positions.end(), apex.begin(), apex.end());
-  cone.triangles.reserve(n);
-  for (uint32_t s = 0; s < n; ++s) cone.triangles.push_back({uint32_t(2 * n) + loop_of_segment[s], 2 * s, 2 * s + 1});
-  return cone;
-}
-
 namespace {
 
 struct Segment {
@@ -166,6 +115,39 @@ void order_into_groups(std::vector<Segment>& segments, size_t begin, size_t end)
   }
 }
 
+// A fan's apex: the mean of its segments' endpoints, moved off the line of every one of them so
+// that none of its triangles has zero area (the tree leaves those out, and the tracer reads ∂M
+// off the tree's triangles, phase.h): by 1e-3 of the segments' box diagonal, up to 8 times, in
+// directions far from any axis (grid-aligned loops cannot keep it on a line). A whole loop on one
+// line (`whole_loop`) cancels (its field is zero, nothing is lost with it): its apex stays the
+// mean; a group of a spanned loop on one line does not, and is moved off it.
+vec3 fan_apex(const Segment* segments, size_t count, bool whole_loop) {
+  dvec3 sum(0.0);
+  for (size_t s = 0; s < count; ++s) sum += dvec3(segments[s].a) + dvec3(segments[s].b);
+  const vec3 mean(sum / double(2 * count));
+  auto collinear = [&](const vec3& z) {
+    for (size_t s = 0; s < count; ++s)
+      if (is_degenerate_triangle(z, segments[s].a, segments[s].b)) return true;
+    return false;
+  };
+  if (!collinear(mean)) return mean;
+  Aabb box;
+  bool on_one_line = true;
+  for (size_t s = 0; s < count; ++s)
+    for (const vec3& p : {segments[s].a, segments[s].b}) {
+      box.extend(p);
+      on_one_line = on_one_line && is_degenerate_triangle(segments[0].a, segments[0].b, p);
+    }
+  if (on_one_line && whole_loop) return mean;
+  const float size = glm::length(box.hi - box.lo);
+  vec3 apex = mean;
+  for (int attempt = 1; attempt <= 8 && collinear(apex); ++attempt) {
+    const vec3 direction = glm::normalize(vec3(0.5773f, 0.6172f + 0.1f * attempt, 0.5345f - 0.07f * attempt));
+    apex = mean + (1e-3f * float(attempt) * size) * direction;
+  }
+  return apex;
+}
+
 }  // namespace
 
 SpanningSurface spanning_surface(const BoundaryCurve& curve) {
@@ -186,9 +168,7 @@ SpanningSurface spanning_surface(const BoundaryCurve& curve) {
     out.mesh.triangles.resize(out.mesh.triangles.size() + more);
   };
   auto mean = [](const std::vector<Segment>& segments, size_t begin, size_t end) {
-    dvec3 sum(0.0);
-    for (size_t s = begin; s < end; ++s) sum += dvec3(segments[s].a) + dvec3(segments[s].b);
-    return vec3(sum / double(2 * (end - begin)));
+    return fan_apex(segments.data() + begin, end - begin, false);
   };
   // ∂M is closed, and so is every level's curve: a level needs at most log_4 of the segments
   // levels; the cap only guards against a curve that is not.
@@ -246,26 +226,105 @@ SpanningSurface spanning_surface(const BoundaryCurve& curve) {
   return out;
 }
 
-std::vector<ConeSegment> cone_segments(const TriangleTree& cone) {
-  std::vector<ConeSegment> segments(cone.vertices.size() / 3);
+namespace {
+
+// Whether the loop is mostly a curve: at most a quarter of its segments start where another does.
+// A scan's rim pinches at a few points (the birdBath scan's: 105 of 1,304); the boundary of
+// flipped faces repeats every segment, and a soup's branches at every point.
+bool mostly_a_curve(const BoundaryCurve& loop) {
+  std::vector<std::array<float, 3>> starts(loop.segment_count());
+  for (size_t s = 0; s < starts.size(); ++s) {
+    const vec3 a = loop.endpoints[2 * s] + 0.0f;  // -0 as +0, as position welding does
+    starts[s] = {a.x, a.y, a.z};
+  }
+  std::sort(starts.begin(), starts.end());
+  size_t repeated = 0;
+  for (size_t s = 1; s < starts.size(); ++s) repeated += starts[s] == starts[s - 1];
+  return 4 * repeated <= starts.size();
+}
+
+// The loop's segments fanned from one apex (fan_apex): a spanning surface of one level.
+SpanningSurface fan_surface(const BoundaryCurve& loop) {
+  std::vector<Segment> segments(loop.segment_count());
+  for (size_t s = 0; s < segments.size(); ++s) segments[s] = {loop.endpoints[2 * s], loop.endpoints[2 * s + 1]};
+  const vec3 apex = fan_apex(segments.data(), segments.size(), true);
+  SpanningSurface out;
+  for (const Segment& s : segments) {
+    const uint32_t first = uint32_t(out.mesh.positions.size());
+    out.mesh.positions.insert(out.mesh.positions.end(), {apex, s.a, s.b});
+    out.mesh.triangles.push_back({first, first + 1, first + 2});
+  }
+  return out;
+}
+
+}  // namespace
+
+Cone boundary_cone(const BoundaryCurve& curve, std::span<const uint32_t> loop_of_segment, uint32_t loop_count) {
+  Cone cone;
+  const size_t n = curve.segment_count();
+  std::vector<std::vector<uint32_t>> segments_of(loop_count);
+  for (uint32_t s = 0; s < n; ++s) segments_of[loop_of_segment[s]].push_back(s);
+  // Each loop's surface apart (its first segment_count triangles carry its segments), then the
+  // carrying triangles of all loops ahead of the inner ones.
+  std::vector<SpanningSurface> surfaces(loop_count);
+  tbb::parallel_for(uint32_t(0), loop_count, [&](uint32_t l) {
+    BoundaryCurve loop;
+    loop.endpoints.reserve(2 * segments_of[l].size());
+    for (uint32_t s : segments_of[l]) {
+      loop.endpoints.push_back(curve.endpoints[2 * s]);
+      loop.endpoints.push_back(curve.endpoints[2 * s + 1]);
+    }
+    surfaces[l] = segments_of[l].size() > kFannedLoopSegments && mostly_a_curve(loop) ? spanning_surface(loop)
+                                                                                      : fan_surface(loop);
+  });
+  auto append = [&](uint32_t l, size_t begin, size_t end) {
+    const Mesh& from = surfaces[l].mesh;
+    for (size_t t = begin; t < end; ++t) {
+      const uint32_t first = uint32_t(cone.mesh.positions.size());
+      for (int k = 0; k < 3; ++k) cone.mesh.positions.push_back(from.positions[from.triangles[t][k]]);
+      cone.mesh.triangles.push_back({first, first + 1, first + 2});
+      cone.loop_of_triangle.push_back(l);
+    }
+  };
+  for (uint32_t l = 0; l < loop_count; ++l) append(l, 0, segments_of[l].size());
+  cone.segment_triangles = cone.mesh.triangles.size();
+  for (uint32_t l = 0; l < loop_count; ++l) append(l, segments_of[l].size(), surfaces[l].mesh.triangles.size());
+  return cone;
+}
+
+namespace {
+
+// The length of the segment of ∂M that leaf-order cone triangle t carries (its edge 1 -> 2), or 0
+// for an inner triangle.
+double carried_length(const TriangleTree& cone, size_t segment_triangles, size_t t) {
+  if (cone.triangle_ids[t] >= segment_triangles) return 0.0;
+  return glm::length(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
+}
+
+}  // namespace
+
+std::vector<ConeSegment> cone_segments(const TriangleTree& cone, size_t segment_triangles) {
+  std::vector<ConeSegment> segments(cone.triangle_ids.size());
   for (size_t t = 0; t < segments.size(); ++t) {
-    const double length2 = glm::dot(dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]),
-                                    dvec3(cone.vertices[3 * t + 2]) - dvec3(cone.vertices[3 * t + 1]));
+    const double length = carried_length(cone, segment_triangles, t);
     // The length rounded up: the bound it enters must not shrink.
-    segments[t] = {std::nextafter(float(std::sqrt(length2)), kInfinity), float(1.0 / length2)};
+    if (length > 0.0) segments[t] = {std::nextafter(float(length), kInfinity), float(1.0 / (length * length))};
   }
   return segments;
 }
 
-std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone) {
-  // A cone triangle's edge 1 -> 2 is its segment of ∂M.
+std::vector<WideNodeLength> cone_boundary_lengths(const TriangleTree& cone, size_t segment_triangles) {
+  struct Context {
+    const TriangleTree* cone;
+    size_t segment_triangles;
+  } context{&cone, segment_triangles};
   return lane_lengths(
       cone.bvh,
       [](const void* c, uint32_t t) {
-        const vec3* v = static_cast<const vec3*>(c);
-        return glm::length(dvec3(v[3 * t + 2]) - dvec3(v[3 * t + 1]));
+        const Context& x = *static_cast<const Context*>(c);
+        return carried_length(*x.cone, x.segment_triangles, t);
       },
-      cone.vertices.data());
+      &context);
 }
 
 }  // namespace gwnrt

@@ -33,16 +33,15 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 // SmoothRegion per group of loops (see model_view.h). Groups: the loops themselves, or, beyond
 // kMaxSmoothRegions, runs of loops sorted along the axis where their centres spread most.
-std::vector<SmoothRegion> group_smooth_regions(const Mesh& cone, const std::vector<uint32_t>& loop_of_segment,
-                                               uint32_t loop_count) {
+std::vector<SmoothRegion> group_smooth_regions(const Cone& cone, uint32_t loop_count) {
   std::vector<Aabb> box(loop_count);
   std::vector<double> area(loop_count, 0.0);
-  for (size_t s = 0; s < cone.triangles.size(); ++s) {
-    const uvec3 t = cone.triangles[s];
-    const dvec3 p0(cone.positions[t[0]]), p1(cone.positions[t[1]]), p2(cone.positions[t[2]]);
-    const uint32_t l = loop_of_segment[s];
+  for (size_t s = 0; s < cone.mesh.triangles.size(); ++s) {
+    const uvec3 t = cone.mesh.triangles[s];
+    const dvec3 p0(cone.mesh.positions[t[0]]), p1(cone.mesh.positions[t[1]]), p2(cone.mesh.positions[t[2]]);
+    const uint32_t l = cone.loop_of_triangle[s];
     area[l] += 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
-    for (int k = 0; k < 3; ++k) box[l].extend(cone.positions[t[k]]);
+    for (int k = 0; k < 3; ++k) box[l].extend(cone.mesh.positions[t[k]]);
   }
   std::vector<uint32_t> group(loop_count);
   uint32_t group_count = loop_count;
@@ -165,11 +164,11 @@ Status GwnModel::build_boundary() const {
   if (Status s = build_segment_tree(boundary_.endpoints, options.max_leaf_segments, boundary_tree_); !s.ok()) return s;
   uint32_t loop_count = 0;
   const std::vector<uint32_t> loop_of_segment = boundary_loops(boundary_, loop_count);
-  const Mesh cone = boundary_cone(boundary_, loop_of_segment, loop_count);
-  if (Status s = build_triangle_tree(cone, options.max_leaf_triangles, cone_); !s.ok()) return s;
-  cone_lengths_ = gwnrt::cone_boundary_lengths(cone_);
-  cone_segments_ = gwnrt::cone_segments(cone_);
-  smooth_regions_ = group_smooth_regions(cone, loop_of_segment, loop_count);
+  const Cone cone = boundary_cone(boundary_, loop_of_segment, loop_count);
+  if (Status s = build_triangle_tree(cone.mesh, options.max_leaf_triangles, cone_); !s.ok()) return s;
+  cone_lengths_ = gwnrt::cone_boundary_lengths(cone_, cone.segment_triangles);
+  cone_segments_ = gwnrt::cone_segments(cone_, cone.segment_triangles);
+  smooth_regions_ = group_smooth_regions(cone, loop_count);
   timings_.boundary_seconds = seconds_since(t0);
   deferral_->built.fetch_or(kPartBoundary, std::memory_order_release);
   return Status::Ok();

@@ -50,16 +50,15 @@ struct WindingOptions {
   TaylorOptions taylor;  // for kTaylor
 };
 
-// `auto` takes the crossing method when the cone has at most this many triangles per triangle
-// of M. A crossing query costs one ray through M's tree plus the cone's tree at kConeBeta
-// (nearer cone triangles exactly, in double); a Taylor query one traversal of M's tree at beta.
-// The threshold is about where the two cost the same (docs/performance.md), and there the exact
-// one is taken. A soup whose every edge is on ∂M has three per triangle.
+// `auto` takes the crossing method when ∂M has at most this many segments per triangle of M. A crossing query costs one
+// ray through M's tree plus the cone's tree at kConeBeta (nearer cone triangles exactly, in double); a Taylor query one
+// traversal of M's tree at beta. The threshold is about where the two cost the same (docs/performance.md), and there
+// the exact one is taken. A soup whose every edge is on ∂M has three per triangle.
 inline constexpr float kCrossingConeRatio = 0.1f;
 
 GWNRT_HD inline WindingMethod resolve_winding_method(const ModelView& m, WindingMethod requested) {
   if (requested != WindingMethod::kAuto) return requested;
-  return float(m.cone.triangle_count) <= kCrossingConeRatio * float(m.triangles.triangle_count)
+  return float(m.boundary.segment_count) <= kCrossingConeRatio * float(m.triangles.triangle_count)
              ? WindingMethod::kCrossing
              : WindingMethod::kTaylor;
 }

@@ -149,7 +149,7 @@ struct Diff {
 };
 
 GWNRT_HD inline Diff diff(float a, float b) {
-  Diff d;
+  Diff d{};
   double x, y;
   two_diff(double(a), double(b), x, y);
   d.n = 0;
@@ -160,7 +160,9 @@ GWNRT_HD inline Diff diff(float a, float b) {
 
 // a·b − c·d, exactly.
 GWNRT_HD inline int cross_term(const Diff& a, const Diff& b, const Diff& c, const Diff& d, double* h) {
-  double ab[8], cd[8];
+  // Zeroed: GCC cannot follow the counts through the products and, depending on what it inlines,
+  // warns that the parts past them may be read (they are not).
+  double ab[8] = {}, cd[8] = {};
   const int nab = product(a.c, a.n, b.c, b.n, ab), ncd = product(c.c, c.n, d.c, d.n, cd);
   return difference(ab, nab, cd, ncd, h);
 }

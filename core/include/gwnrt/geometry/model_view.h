@@ -39,14 +39,15 @@ enum ModelPart : uint32_t {
 struct ModelView {
   TriangleTreeView triangles;  // M
   SegmentTreeView boundary;    // ∂M
-  // The cone C over ∂M: triangles (z, a, b) for each boundary segment a→b, z the mean of the
-  // boundary vertices. M − C is closed, so w − w_C is an integer off M ∪ C and w mod 1 =
-  // w_C mod 1 (docs/design.md §3): the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
+  // The cone C over ∂M (boundary_cone): a triangle (z, a, b) for each boundary segment a→b, z its
+  // loop's mean or its group's in a spanned loop, and the spanned loops' inner triangles. M − C
+  // is closed, so w − w_C is an integer off M ∪ C and w mod 1 = w_C mod 1 (docs/design.md §3):
+  // the tracer's Harnack steps evaluate C, not M. Empty when ∂M is.
   TriangleTreeView cone;
-  // Per node of the cone's tree: the length of ∂M below each lane (its triangles' edges 1 -> 2
-  // are exactly the segments of ∂M), for the tracer's bound on |∇w| (phase.h).
+  // Per node of the cone's tree: the length of ∂M below each lane (the segments its triangles
+  // carry, as their edges 1 -> 2), for the tracer's bound on |∇w| (phase.h).
   const WideNodeLength* cone_boundary_lengths = nullptr;
-  const ConeSegment* cone_segments = nullptr;  // per cone triangle, in leaf order
+  const ConeSegment* cone_segments = nullptr;  // per cone triangle, in leaf order (length 0: inner)
   // The sheet triangles of M for the level sheet_level (sdf/sheets.h, is_sheet): the distance to
   // the sheet pieces of S is the distance to them.
   TriangleTreeView sheets;

@@ -23,6 +23,12 @@ inline constexpr float kRootTolerance = 1e-4f;
 // between crossings shorter than twice this are taken as constant.
 inline constexpr float kCrossingOffset = 1e-3f;
 
+// The cone's beta for a smooth Hermite point's normal: the box bounds' (kTaylorPointBeta), whose
+// gradient errors stayed below 0.6% (an angle of 6e-3 at most: a QEF vertex moves by that times
+// its distance from the Hermite points, within a cell); the derivatives' own 16 (a relative 1e-4)
+// made the normals a quarter of the mesher's time on a scan (docs/performance.md).
+inline constexpr float kHermiteNormalBeta = kTaylorPointBeta;
+
 enum class HermiteKind : uint8_t { kSheet = 0, kSmooth = 1, kFallback = 2 };
 
 struct HermitePoint {
@@ -68,7 +74,11 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
   out.capped = step == kMaxRootSteps;
   t = 0.5f * (ta + tb);
   out.point = p0 + t * direction;
-  const vec3 g = evaluate_winding(m, out.point, winding, true, false).gradient;
+  // Only the normal's direction is read: by crossings, the cone's clusters expanded beyond
+  // kHermiteNormalBeta radii rather than the derivatives' 16.
+  const vec3 g = resolve_winding_method(m, winding.method) == WindingMethod::kCrossing
+                     ? winding_number_crossing<true, false>(m, out.point, kHermiteNormalBeta).gradient
+                     : evaluate_winding(m, out.point, winding, true, false).gradient;
   const float length = glm::length(g);
   out.normal = length > 0.0f && is_finite(length) ? -g / length : (a_inside ? direction : -direction);
   return out;

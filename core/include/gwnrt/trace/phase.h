@@ -1,10 +1,10 @@
 // What a Harnack step needs at a point, from one traversal of the cone C (ModelView::cone):
 // φ = w mod 1, optionally ∇w, the distance to ∂M and an upper bound on |∇w|. Host-and-device.
 //
-// The cone's triangles are (apex, a, b) for each segment a -> b of ∂M, so its tree is also a
-// tree over ∂M: every near triangle gives its solid angle and its segment's share of the bound
-// from the same vectors, and every far cluster its expansion and a bound for all of its
-// segments at once.
+// The cone's triangles are (apex, a, b), one for each segment a -> b of ∂M (and inner ones that
+// carry none), so its tree is also a tree over ∂M: every near triangle gives its solid angle and
+// its segment's share of the bound from the same vectors, and every far cluster its expansion and
+// a bound for all of its segments at once.
 //
 // The bound: off ∂M, ∇w is the Biot–Savart field of ∂M (the gradient of a solid angle is the
 // field of its boundary loop), so |∇w(x)| <= (1/4π) ∮ |dl| / |l - x|². Only ∂M enters, and the
@@ -60,8 +60,10 @@ struct PhaseSum {
     // Every point of the cluster is within its radius of the centre, and inside its box.
     const float ball = max_of(glm::length(d) - tree.expansion[node].radius[lane], 0.0f);
     const float d2 = max_of(ball * ball, box_distance2(tree.bvh.nodes[node], lane, x));
-    integral += lengths[node].length[lane] / d2;
-    nearest2 = min_of(nearest2, d2);
+    if (lengths[node].length[lane] > 0.0f) {  // none below: inner triangles only
+      integral += lengths[node].length[lane] / d2;
+      nearest2 = min_of(nearest2, d2);
+    }
   }
 
   // In double: the cone's inner edges (apex to boundary) are singular lines of each of their
@@ -78,16 +80,19 @@ struct PhaseSum {
     const SolidAngleTangent<double> tangent = solid_angle_tangent(g0, g1, g2, l0, l1, l2, c12, d12);
     near_half_angles.add({float(tangent.numerator), float(tangent.denominator)});
     // The segment a -> b: its share of the bound, and its distance (float is plenty for both).
-    const dvec3 e = g2 - g1;
-    const float c2 = float(glm::dot(c12, c12));
+    // An inner triangle of a spanned loop carries none (length 0).
     const ConeSegment segment = segments[t];
-    integral += segment_inverse_square_integral(float(l1 * l2), float(d12), c2, segment.length);
-    // Without branches (which of the three is nearest varies from segment to segment): the
-    // nearer endpoint, or the line when x projects inside the segment.
-    const bool inside = glm::dot(g1, e) < 0.0 && glm::dot(g2, e) > 0.0;
-    const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
-    const float dist2 = inside ? c2 * segment.inverse_length2 : end2;
-    nearest2 = dist2 < nearest2 ? dist2 : nearest2;
+    if (segment.length > 0.0f) {
+      const dvec3 e = g2 - g1;
+      const float c2 = float(glm::dot(c12, c12));
+      integral += segment_inverse_square_integral(float(l1 * l2), float(d12), c2, segment.length);
+      // Without branches (which of the three is nearest varies from segment to segment): the
+      // nearer endpoint, or the line when x projects inside the segment.
+      const bool inside = glm::dot(g1, e) < 0.0 && glm::dot(g2, e) > 0.0;
+      const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
+      const float dist2 = inside ? c2 * segment.inverse_length2 : end2;
+      nearest2 = dist2 < nearest2 ? dist2 : nearest2;
+    }
     // In double: the cone's long inner edges carry large Biot–Savart terms that cancel between
     // neighbours, and in float that cancellation bends normals above a flat cap by 1e-2.
     if constexpr (WantGradient) near_gradient.add(corners, continues);
