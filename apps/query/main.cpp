@@ -316,7 +316,7 @@ int main(int argc, char** argv) {
     // Every field but the distances evaluates w (auto resolved with the cone, built for them).
     if (request.fields & ~(gwnrt::kFieldUnsignedDistance | gwnrt::kFieldBoundaryDistance | gwnrt::kFieldSheetDistance))
       std::fprintf(stderr, "%s: w by %s (--method %s)\n", kProgram,
-                   gwnrt::winding_method_name(gwnrt::resolve_winding_method(model.view(), request.method)),
+                   gwnrt::winding_method_name(gwnrt::resolve_point_method(model.view(), request.method)),
                    method_name.c_str());
   }
 

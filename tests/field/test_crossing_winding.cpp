@@ -445,7 +445,8 @@ TEST(CrossingWinding, AutoMatchesBruteForceOnRealMeshes) {
     std::vector<double> error(points.size(), -1.0);
     reference::parallel_over(points.size(), [&](size_t i) {
       if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
-      const double w = evaluate_winding(v, points[i], WindingOptions{}).w;
+      const double w =
+          evaluate_winding(v, points[i], WindingOptions{resolve_point_method(v, WindingMethod::kAuto), {}}).w;
       error[i] = std::fabs(w - reference::reference_w(ref, dvec3(points[i])));
     });
     size_t compared = 0;
@@ -458,7 +459,7 @@ TEST(CrossingWinding, AutoMatchesBruteForceOnRealMeshes) {
     }
     EXPECT_GT(compared, count * 9 / 10) << name;
     std::printf("[ %-26.26s ] %s: max |dw| %.2e over %zu points\n", name,
-                winding_method_name(resolve_winding_method(v, WindingMethod::kAuto)), max_error, compared);
+                winding_method_name(resolve_point_method(v, WindingMethod::kAuto)), max_error, compared);
   }
 }
 
@@ -476,6 +477,52 @@ TEST(CrossingWinding, AutoPicksTaylorForAllBoundarySoupAndCrossingForSmallBounda
   // And the sheets were classified by the method auto chose.
   EXPECT_EQ(holes.sheet_method(), WindingMethod::kCrossing);
   EXPECT_EQ(soup.sheet_method(), WindingMethod::kTaylor);
+}
+
+// Point queries' auto goes by the work sampled at build on a lattice: the same ratio, within a
+// factor of 1.5, from an independent count at 1000 random points of the same box, and the choice:
+// the birdBath scan (hundreds of holes around a long rim: its ∂M is under the segment rule's
+// threshold) by Taylor, meshes with few or small loops and closed ones by crossings; the mesher's
+// and the sheets' rule keeps crossings on the scan.
+TEST(CrossingWinding, AutoForPointsGoesByTheSampledWork) {
+  struct Expected {
+    const char* name;
+    WindingMethod method;
+  };
+  for (const Expected& e :
+       {Expected{"realworld/birdBath_ggg_photogrammetry.obj", WindingMethod::kTaylor},
+        Expected{"bunny_holes.obj", WindingMethod::kCrossing}, Expected{"teapot.obj", WindingMethod::kCrossing},
+        Expected{"realworld/dolphins_colored.ply", WindingMethod::kCrossing},
+        Expected{"realworld/kuka_kr150r3100_2_visual_base_link.stl", WindingMethod::kCrossing},
+        Expected{"bunny.obj", WindingMethod::kCrossing}}) {
+    const GwnModel model = build_model(load_test_mesh(e.name));
+    const ModelView v = model.view();
+    struct Count {
+      uint64_t units = 0;
+      void far(uint32_t, int, const vec3&) { ++units; }
+      void near(uint32_t, const vec3&, const vec3&, const vec3&) { ++units; }
+    } taylor;
+    CrossingStats crossing;
+    const vec3 extent = v.bounds.hi - v.bounds.lo;
+    const Aabb grown{v.bounds.lo - 0.2f * extent, v.bounds.hi + 0.2f * extent};
+    for (const vec3& x : test::sample_points(grown, 1000, 29)) {
+      (void)winding_number_crossing<false, false>(v, x, kConeBeta, &crossing);
+      visit_multipole(v.triangles, x, 2.0f, taylor);
+    }
+    const double ratio = double(crossing.cone_near + crossing.cone_far) / double(taylor.units);
+    if (v.cone.triangle_count == 0) {
+      EXPECT_EQ(v.crossing_work_ratio, 0.0f) << e.name;
+    } else {
+      EXPECT_GT(v.crossing_work_ratio, ratio / 1.5) << e.name;
+      EXPECT_LT(v.crossing_work_ratio, ratio * 1.5) << e.name;
+    }
+    EXPECT_EQ(resolve_point_method(v, WindingMethod::kAuto), e.method) << e.name;
+    EXPECT_EQ(resolve_point_method(v, WindingMethod::kCrossing), WindingMethod::kCrossing) << e.name;
+    EXPECT_EQ(resolve_winding_method(v, WindingMethod::kAuto), WindingMethod::kCrossing) << e.name;
+    std::printf("[ %-26.26s ] work ratio %.3f on the lattice, %.3f at random points: %s\n", e.name,
+                double(v.crossing_work_ratio), ratio,
+                winding_method_name(resolve_point_method(v, WindingMethod::kAuto)));
+  }
 }
 
 // The brute-force sides of a triangle: w_o = the mean of w just off its centroid on either side

@@ -169,6 +169,10 @@ Status GwnModel::build_boundary() const {
   cone_lengths_ = gwnrt::cone_boundary_lengths(cone_, cone.segment_triangles);
   cone_segments_ = gwnrt::cone_segments(cone_, cone.segment_triangles);
   smooth_regions_ = group_smooth_regions(cone, loop_count);
+  ModelView v = view();  // the boundary's part is not marked built yet
+  v.boundary = boundary_tree_.view();
+  v.cone = cone_.view();
+  crossing_work_ratio_ = sample_crossing_work_ratio(v);
   timings_.boundary_seconds = seconds_since(t0);
   deferral_->built.fetch_or(kPartBoundary, std::memory_order_release);
   return Status::Ok();
@@ -286,6 +290,7 @@ ModelView GwnModel::view() const {
     v.cone_segments = cone_segments_.data();
     v.smooth_regions = smooth_regions_.data();
     v.smooth_region_count = uint32_t(smooth_regions_.size());
+    v.crossing_work_ratio = crossing_work_ratio_;
   }
   if (built & kPartSheets) {
     v.sheets = sheets_.view();

@@ -54,6 +54,9 @@ struct ModelView {
   float sheet_level = __builtin_nanf("");  // NaN: not classified (the tree is empty)
   const SmoothRegion* smooth_regions = nullptr;
   uint32_t smooth_region_count = 0;
+  // A crossing query's work over a Taylor query's, sampled when the boundary is built
+  // (field/evaluate_winding.h, sample_crossing_work_ratio); 0 for a closed mesh.
+  float crossing_work_ratio = 0;
   Aabb bounds;               // of M
   float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (docs/design.md §5)
   uint32_t parts = 0;        // ModelPart bits: what the view holds

@@ -132,6 +132,7 @@ class GwnModel {
   mutable std::vector<WideNodeLength> cone_lengths_;
   mutable std::vector<ConeSegment> cone_segments_;
   mutable std::vector<SmoothRegion> smooth_regions_;
+  mutable float crossing_work_ratio_ = 0;
   mutable std::vector<float> other_winding_;
   mutable std::vector<int8_t> sheet_jump_;
   mutable std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta

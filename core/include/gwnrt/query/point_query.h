@@ -68,7 +68,7 @@ GWNRT_HD inline PointResult evaluate_point(const ModelView& model, const vec3& x
   const bool want_gradient = want_pseudo || (request.fields & kFieldGradient);
   const bool want_hessian = want_pseudo || (request.fields & kFieldHessian);
   const bool want_sdf = request.fields & kFieldSignedDistance;
-  const WindingOptions winding{resolve_winding_method(model, request.method), request.taylor};
+  const WindingOptions winding{resolve_point_method(model, request.method), request.taylor};
   // The brute-force sdf takes w, ∇w and H_w from one sum; otherwise sdf evaluates them itself,
   // only as far as it needs (mostly w alone), unless they are taken anyway.
   const bool full = want_hessian || (winding.method == WindingMethod::kBrute && want_sdf);
