@@ -221,9 +221,11 @@ TEST(CrossingWinding, MatchesBruteForceOnMeshesAndSoups) {
     const reference::ReferenceMesh ref = reference::reference_mesh(c.mesh);
     const Aabb box = test::mesh_bounds(c.mesh);
     const GwnModel model = build_model(std::move(c.mesh));
-    const std::vector<vec3> points = test::sample_points(box, 1500, 3);
+    // Fewer points on the scan under AddressSanitizer (its 35k triangles' brute force).
+    const size_t count = test::kAddressSanitizer && model.mesh().triangles.size() > 20000 ? 400 : 1500;
+    const std::vector<vec3> points = test::sample_points(box, count, 3);
     const Comparison r = compare_with_brute_force(c.name, model, ref, points);
-    EXPECT_GT(r.compared, 1000u) << c.name;
+    EXPECT_GT(r.compared, count * 2 / 3) << c.name;
     std::printf(
         "[ %-26s ] %zu triangles, %u cone triangles over %zu segments: max |dw| %.2e over %zu points (%zu "
         "nearer M)\n",

@@ -60,6 +60,8 @@ inline double distance_to_triangle(const Mesh& m, uint32_t t, const dvec3& x) {
 inline Mesh open_mesh(const std::string& name) {
   if (name == "bunny_holes") return load_test_mesh("bunny_holes.obj");
   if (name == "open_cube") return test::make_cube(true);
+  // A rim of 200 segments: the cone spans it (boundary_cone) rather than fanning it.
+  if (name == "open_hemisphere") return test::make_hemisphere(12, 200);
   return test::make_hexagon_fan();
 }
 
