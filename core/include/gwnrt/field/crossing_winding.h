@@ -230,6 +230,40 @@ template <>
 struct ConeCrossingVisitor<false, false> {
   using type = ConeCrossingLanes;
 };
+
+// w_C and ∇w_C on the host: ConeCrossingSum<true, false> with a node's far lanes expanded together
+// (their expansion and its gradient were a third of a scan's meshing, at the box bounds' centres
+// and the smooth roots' normals); the near triangles stay scalar (their fans' shared edges).
+struct ConeCrossingGradientLanes : ConeCrossingSum<true, false> {
+  f4 far_omega{};
+  f4 far_gradient[3] = {};
+
+  ConeCrossingGradientLanes(const TriangleTreeView& cone_tree, const RayFrame& ray, const vec3& point, float cone_beta,
+                            CrossingStats* counters)
+      : ConeCrossingSum<true, false>(cone_tree, ray, point, cone_beta, counters) {}
+
+  GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
+    add_far_lanes_with_gradient<2>(
+        cone, [&](auto field) { return load4(field(node)); }, mask, dx, dy, dz, far_omega, far_gradient);
+    const uint32_t far_bits = lane_bits(mask);
+    if (stats) stats->cone_far += uint32_t(__builtin_popcount(far_bits));
+    const WideNode& n = cone.bvh.nodes[node];
+    for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
+      add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
+  }
+  // The lanes folded into far_field, which winding() and cone_gradient() read.
+  GWNRT_FORCEINLINE void traverse() {
+    if (cone.bvh.node_count == 0) return;
+    visit_multipole(cone, x, beta, *this);
+    far_field.omega += lane_sum(far_omega);
+    for (int k = 0; k < 3; ++k) far_field.gradient[k] += lane_sum(far_gradient[k]);
+  }
+};
+
+template <>
+struct ConeCrossingVisitor<true, false> {
+  using type = ConeCrossingGradientLanes;
+};
 #endif
 
 // w from the cone's traversal along a ray and the jumps of M met ahead on that ray.
