@@ -154,6 +154,15 @@ struct ConeCrossingVisitor {
 };
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
+// The far lanes `far_bits` of a node, counted, and the crossings below those the axis ray meets.
+GWNRT_FORCEINLINE void add_far_lane_crossings(const TriangleTreeView& cone, const RayFrame& frame, uint32_t node,
+                                              uint32_t far_bits, int& jumps, CrossingStats* stats) {
+  if (stats) stats->cone_far += uint32_t(__builtin_popcount(far_bits));
+  const WideNode& n = cone.bvh.nodes[node];
+  for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
+    add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
+}
+
 // w_C and C's jumps on the host: ConeCrossingSum<false, false>'s terms and decisions with a
 // node's far lanes expanded together and the near triangles four at a time in double, four angle
 // products side by side: the near cone triangles are most of a crossing query's time, and the
@@ -175,11 +184,7 @@ struct ConeCrossingLanes {
 
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
     far_omega += lane_select(mask, far_lanes_omega<2>(cone, node, dx, dy, dz), f4{});
-    const uint32_t far_bits = lane_bits(mask);
-    if (stats) stats->cone_far += uint32_t(__builtin_popcount(far_bits));
-    const WideNode& n = cone.bvh.nodes[node];
-    for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
-      add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
+    add_far_lane_crossings(cone, frame, node, lane_bits(mask), jumps, stats);
   }
   // A leaf's triangles four at a time (BuildOptions allows leaves of up to kMaxLeafSize).
   GWNRT_FORCEINLINE void near_leaf(uint32_t first, uint32_t count) {
@@ -245,11 +250,7 @@ struct ConeCrossingGradientLanes : ConeCrossingSum<true, false> {
   GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
     add_far_lanes_with_gradient<2>(
         cone, [&](auto field) { return load4(field(node)); }, mask, dx, dy, dz, far_omega, far_gradient);
-    const uint32_t far_bits = lane_bits(mask);
-    if (stats) stats->cone_far += uint32_t(__builtin_popcount(far_bits));
-    const WideNode& n = cone.bvh.nodes[node];
-    for (uint32_t meets = far_bits & axis_ray_lane_mask(n, frame, 0.0f); meets != 0; meets &= meets - 1)
-      add_crossings_below(cone, frame, n, lowest_set_bit(meets), jumps, stats);
+    add_far_lane_crossings(cone, frame, node, lane_bits(mask), jumps, stats);
   }
   // The lanes folded into far_field, which winding() and cone_gradient() read.
   GWNRT_FORCEINLINE void traverse() {
