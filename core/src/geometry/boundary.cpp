@@ -148,6 +148,19 @@ vec3 fan_apex(const Segment* segments, size_t count, bool whole_loop) {
   return apex;
 }
 
+// Triangles (apex, a, b) for segments [begin, end) into the soup `mesh` (sized already), segment s
+// as triangle first + s.
+void fan_into(Mesh& mesh, size_t first, const std::vector<Segment>& segments, const vec3& apex, size_t begin,
+              size_t end) {
+  for (size_t s = begin; s < end; ++s) {
+    const size_t t = first + s;
+    mesh.positions[3 * t] = apex;
+    mesh.positions[3 * t + 1] = segments[s].a;
+    mesh.positions[3 * t + 2] = segments[s].b;
+    mesh.triangles[t] = {uint32_t(3 * t), uint32_t(3 * t + 1), uint32_t(3 * t + 2)};
+  }
+}
+
 }  // namespace
 
 SpanningSurface spanning_surface(const BoundaryCurve& curve) {
@@ -155,13 +168,7 @@ SpanningSurface spanning_surface(const BoundaryCurve& curve) {
   std::vector<Segment> level(curve.segment_count());
   for (size_t s = 0; s < level.size(); ++s) level[s] = {curve.endpoints[2 * s], curve.endpoints[2 * s + 1]};
   auto fan = [&](const std::vector<Segment>& segments, size_t first, const vec3& apex, size_t begin, size_t end) {
-    for (size_t s = begin; s < end; ++s) {
-      const size_t t = first + s;
-      out.mesh.positions[3 * t] = apex;
-      out.mesh.positions[3 * t + 1] = segments[s].a;
-      out.mesh.positions[3 * t + 2] = segments[s].b;
-      out.mesh.triangles[t] = {uint32_t(3 * t), uint32_t(3 * t + 1), uint32_t(3 * t + 2)};
-    }
+    fan_into(out.mesh, first, segments, apex, begin, end);
   };
   auto grow = [&](size_t more) {
     out.mesh.positions.resize(out.mesh.positions.size() + 3 * more);
@@ -247,13 +254,10 @@ bool mostly_a_curve(const BoundaryCurve& loop) {
 SpanningSurface fan_surface(const BoundaryCurve& loop) {
   std::vector<Segment> segments(loop.segment_count());
   for (size_t s = 0; s < segments.size(); ++s) segments[s] = {loop.endpoints[2 * s], loop.endpoints[2 * s + 1]};
-  const vec3 apex = fan_apex(segments.data(), segments.size(), true);
   SpanningSurface out;
-  for (const Segment& s : segments) {
-    const uint32_t first = uint32_t(out.mesh.positions.size());
-    out.mesh.positions.insert(out.mesh.positions.end(), {apex, s.a, s.b});
-    out.mesh.triangles.push_back({first, first + 1, first + 2});
-  }
+  out.mesh.positions.resize(3 * segments.size());
+  out.mesh.triangles.resize(segments.size());
+  fan_into(out.mesh, 0, segments, fan_apex(segments.data(), segments.size(), true), 0, segments.size());
   return out;
 }
 
