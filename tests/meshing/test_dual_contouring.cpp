@@ -4,6 +4,8 @@
 
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/meshing/dual_contouring.h"
+#include "gwnrt/meshing/edge_hermite.h"
+#include "reference/brute_force_winding.h"
 #include "test_util.h"
 
 namespace gwnrt {
@@ -69,6 +71,47 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
       }
     }
     EXPECT_GT(screened, 1000) << name << ": the screen was never used";
+  }
+}
+
+// The edges' smooth roots, searched with w at kRootSearchConeBeta (within 1e-4 of the exact): by
+// the double brute force each lies on S up to the bracket's width (kRootTolerance of the edge) or
+// that error, on edges across S by the rims of open meshes.
+TEST(MeshingEdges, SmoothRootsLieOnSWithinTheSearchsError) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj"}) {
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView view = model.view();
+    const reference::ReferenceMesh ref = reference::reference_mesh(model.mesh());
+    const BoundaryCurve& rim = model.boundary();
+    const float h = 0.01f * glm::length(model.bounds().hi - model.bounds().lo);
+    WindingOptions winding;
+    winding.method = WindingMethod::kCrossing;
+    test::Random random(23);
+    int smooth = 0;
+    for (int edge = 0; edge < 20000 && smooth < 150; ++edge) {
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const vec3 on_rim = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
+      const vec3 p0 = on_rim + random.uniform(0.1f * h, 4.0f * h) * random.unit();
+      const int axis = random.index(3);
+      vec3 p1 = p0;
+      p1[axis] += h;
+      const float f0 = winding_number_crossing<false, false>(view, p0).w - 0.5f;
+      const float f1 = winding_number_crossing<false, false>(view, p1).w - 0.5f;
+      if ((f0 > 0.0f) == (f1 > 0.0f)) continue;
+      const HermitePoint hit = edge_hermite(view, winding, 0.5f, p0, axis, h, f0, f1);
+      ASSERT_NE(hit.kind, HermiteKind::kFallback) << name << " edge " << edge;
+      if (hit.kind != HermiteKind::kSmooth) continue;
+      ++smooth;
+      // S crosses within the bracket's width of the point, or w there is within the error of the
+      // search's w (where the slope is small).
+      const dvec3 x(hit.point);
+      dvec3 e(0.0);
+      e[axis] = kRootTolerance * h;
+      const double before = reference::reference_w(ref, x - e) - 0.5, after = reference::reference_w(ref, x + e) - 0.5;
+      EXPECT_TRUE((before > 0.0) != (after > 0.0) || std::abs(reference::reference_w(ref, x) - 0.5) <= 2e-4)
+          << name << " edge " << edge << ": w − 1/2 " << before << " and " << after << " either side";
+    }
+    EXPECT_GE(smooth, 50) << name;
   }
 }
 

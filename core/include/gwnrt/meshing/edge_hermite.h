@@ -23,11 +23,20 @@ inline constexpr float kRootTolerance = 1e-4f;
 // between crossings shorter than twice this are taken as constant.
 inline constexpr float kCrossingOffset = 1e-3f;
 
-// The cone's beta for a smooth Hermite point's normal: the box bounds' (kTaylorPointBeta), whose
-// gradient errors stayed below 0.6% (an angle of 6e-3 at most: a QEF vertex moves by that times
-// its distance from the Hermite points, within a cell); the derivatives' own 16 (a relative 1e-4)
-// made the normals a quarter of the mesher's time on a scan (docs/performance.md).
-inline constexpr float kHermiteNormalBeta = kTaylorPointBeta;
+// The cone's beta for a smooth Hermite point's normal: w's own (kConeBeta). Its gradient errors
+// reach a few percent where |∇w| is small, yet from 8 to 5 no vertex of the scan or the abb STL
+// moved by 1e-4 of a cell (a QEF vertex moves by the angle times its distance from the Hermite
+// points), and the normals took a third less; the derivatives' own 16 made them a quarter of the
+// mesher's time on a scan (docs/performance.md).
+inline constexpr float kHermiteNormalBeta = kConeBeta;
+
+// The root search's w by crossings: the cone's clusters expanded beyond this many radii rather
+// than kConeBeta's 5. It decides only where S crosses an edge, never which edges it crosses (the
+// corners' signs, exact): within 1e-4 of the exact w (9.5e-5 the most seen, beside the scan's
+// rim), a root moves by that over |∂w/∂t|, and the scan's edges took a quarter less time
+// (docs/performance.md). An edge whose corners' signs its walk does not reproduce is walked again
+// with the exact w.
+inline constexpr float kRootSearchConeBeta = 3.0f;
 
 enum class HermiteKind : uint8_t { kSheet = 0, kSmooth = 1, kFallback = 2 };
 
@@ -95,25 +104,23 @@ struct EdgeBound {
   int jumps = 0;
 };
 
-// The point where S crosses the edge from p0 to p0 + h·e_axis, f0 = w(p0) − w* and f1 = w(end)
-// − w* of different signs (inside: f > 0). Along the edge w is continuous except at crossings
-// of M, where it jumps by the crossing's jump; walking from p0, the first place where f changes
-// sign is either within an interval between crossings (a smooth piece: a bracketed root) or at a
-// crossing (a sheet: the exact ray–triangle point and the triangle's normal, turned outward).
-// Off a cone (a closed mesh) and with exact w, w is constant between crossings and no w is
-// evaluated at all. With a bound, an interval it settles to one sign, and the side after its
-// crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
-// continuous).
-GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
-                                          const vec3& p0, int axis, float h, float f0, float f1,
-                                          const EdgeBound* bound = nullptr) {
+namespace detail {
+
+// edge_hermite's walk, w by crossings at `cone_beta` where the method is crossing.
+GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions& winding, float level, const vec3& p0,
+                                       int axis, float h, float f0, float f1, const EdgeBound* bound, float cone_beta) {
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
-  const auto value = [&](float t) { return evaluate_winding(m, p0 + t * direction, winding).w - level; };
+  const bool by_crossing = resolve_winding_method(m, winding.method) == WindingMethod::kCrossing;
+  const auto value = [&](float t) {
+    const vec3 x = p0 + t * direction;
+    return (by_crossing ? winding_number_crossing<false, false>(m, x, cone_beta).w
+                        : evaluate_winding(m, x, winding).w) -
+           level;
+  };
   int jumps = bound ? bound->jumps : 0;  // J on the current interval: it falls by each crossing's jump
-  const bool piecewise_constant =
-      m.cone.triangle_count == 0 && resolve_winding_method(m, winding.method) == WindingMethod::kCrossing;
+  const bool piecewise_constant = m.cone.triangle_count == 0 && by_crossing;
   const float offset = kCrossingOffset * h;
   float t_start = 0.0f, f_start = f0;
   uint32_t index_after = kEmptyLane;
@@ -137,7 +144,7 @@ GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptio
     }
     if ((f_start > 0.0f) != (f_end > 0.0f)) {
       const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
-      return detail::smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value);
+      return smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value);
     }
     if (!found) {
       capped = false;
@@ -169,6 +176,27 @@ GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptio
   out.normal = f0 > 0.0f ? direction : -direction;
   out.capped = capped;
   return out;
+}
+
+}  // namespace detail
+
+// The point where S crosses the edge from p0 to p0 + h·e_axis, f0 = w(p0) − w* and f1 = w(end)
+// − w* of different signs (inside: f > 0). Along the edge w is continuous except at crossings
+// of M, where it jumps by the crossing's jump; walking from p0, the first place where f changes
+// sign is either within an interval between crossings (a smooth piece: a bracketed root) or at a
+// crossing (a sheet: the exact ray–triangle point and the triangle's normal, turned outward).
+// Off a cone (a closed mesh) and with exact w, w is constant between crossings and no w is
+// evaluated at all. With a bound, an interval it settles to one sign, and the side after its
+// crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
+// continuous). The values by crossings are taken at kRootSearchConeBeta.
+GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
+                                          const vec3& p0, int axis, float h, float f0, float f1,
+                                          const EdgeBound* bound = nullptr) {
+  const HermitePoint out = detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta);
+  if (out.kind != HermiteKind::kFallback || out.capped ||
+      resolve_winding_method(m, winding.method) != WindingMethod::kCrossing || m.cone.triangle_count == 0)
+    return out;
+  return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta);
 }
 
 }  // namespace gwnrt
