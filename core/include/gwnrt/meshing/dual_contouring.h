@@ -87,22 +87,21 @@ GWNRT_HD inline BlockRay block_ray(const MeshGrid& grid, const Aabb& bounds, con
 }
 
 // Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
-// first-order centres at three scales: the block (8³ corners), its eighths (4³: their own,
+// first-order centres at two scales: the block (8³ corners) and its eighths (4³: their own,
 // tighter bounds) where the block's estimate may leave some of their corners unsettled or the
-// block has no bounds (∂M in it), and their eighths (2³) where that of the eighth may, unless S
-// passes through (its estimate straddles a level: those corners are evaluated anyway). The
-// block's ray is the first of the six axis directions, nearest exit first, whose swept box holds
-// no ∂M (else the nearest exit's). A corner takes the finest centre that holds it.
-inline constexpr int kBlockWindingPoints = 1 + 8 + 64;
+// block has no bounds (∂M in it). (A centre's ∇w costs about as much as the exact values of the
+// eight corners of a 2³ eighth's eighth: such centres cost more than they saved.) The block's
+// ray is the first of the six axis directions, nearest exit first, whose swept box holds no ∂M
+// (else the nearest exit's). A corner takes the finer centre that holds it.
+inline constexpr int kBlockWindingPoints = 1 + 8;
 struct BlockWinding {
   BoxFieldBounds bounds[9];  // the block, its eighths (index x + 2y + 4z)
-  uint64_t fine = 0;         // bit i: point[9 + i] computed (2³ corners, index x + 4y + 16z)
   uint32_t mid = 0;          // bit i: point[1 + i] computed
   bool block = false;        // point[0] computed
   int32_t axis = 2;
   float sign = 1.0f;
   TaylorPoint point[kBlockWindingPoints];
-  GWNRT_HD bool any() const { return block || mid || fine; }
+  GWNRT_HD bool any() const { return block || mid; }
 };
 
 // The box of the corners [first, first + count) of block b along each axis.
@@ -115,30 +114,25 @@ GWNRT_HD inline Aabb corner_box(const MeshGrid& grid, const GridCoord& b, const 
   return box;
 }
 
-// A first-order centre of a block (BlockWinding) and the bounds it is read with, which hold on the
-// corners [local & ~(span − 1), + span) along each axis.
+// A first-order centre of a block (BlockWinding) and the bounds it is read with, which hold on
+// the centre's own corners, [first, first + count) along each axis.
 struct TaylorCentre {
   const TaylorPoint* point = nullptr;
   const BoxFieldBounds* bounds = nullptr;
-  GridCoord first;  // the centre's own corners: [first, first + count)
+  GridCoord first;
   int count = 0;
-  int span = 0;
   GWNRT_HD vec3 centre(const MeshGrid& grid, const GridCoord& b) const {
     return corner_box(grid, b, first, count).centre();
   }
 };
 
-// The centres computed for corner `local` of a block, finest first: its eighth's eighth, its
-// eighth (both read with the eighth's bounds), the block.
-GWNRT_HD inline int taylor_centres(const BlockWinding& w, const GridCoord& local, TaylorCentre (&out)[3]) {
-  const int fine = local.x / 2 + 4 * (local.y / 2) + 16 * (local.z / 2);
+// The centres computed for corner `local` of a block, finer first: its eighth, the block.
+GWNRT_HD inline int taylor_centres(const BlockWinding& w, const GridCoord& local, TaylorCentre (&out)[2]) {
   const int mid = local.x / 4 + 2 * (local.y / 4) + 4 * (local.z / 4);
   int n = 0;
-  if ((w.fine >> fine) & 1u)
-    out[n++] = {&w.point[9 + fine], &w.bounds[1 + mid], {local.x & ~1, local.y & ~1, local.z & ~1}, 2, 4};
   if ((w.mid >> mid) & 1u)
-    out[n++] = {&w.point[1 + mid], &w.bounds[1 + mid], {local.x & ~3, local.y & ~3, local.z & ~3}, 4, 4};
-  if (w.block) out[n++] = {&w.point[0], &w.bounds[0], {0, 0, 0}, kBlockCells, kBlockCells};
+    out[n++] = {&w.point[1 + mid], &w.bounds[1 + mid], {local.x & ~3, local.y & ~3, local.z & ~3}, 4};
+  if (w.block) out[n++] = {&w.point[0], &w.bounds[0], {0, 0, 0}, kBlockCells};
   return n;
 }
 
@@ -157,28 +151,15 @@ struct BlockWindingPass {
     choose_ray(block, centre, w);
     if (w.bounds[0].usable) {
       w.block = taylor_point(model, centre, w.axis, w.sign, w.point[0]);
-      bool straddles = false;
-      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level, straddles)) return;
+      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return;
     }
     for (int i = 0; i < 8; ++i) {
       const GridCoord first{4 * (i & 1), 4 * ((i >> 1) & 1), 4 * (i >> 2)};
       const Aabb mid = corner_box(view.grid, b, first, 4);
-      bool straddles = false;
-      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level, straddles)) continue;
+      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level)) continue;
       BoxFieldBounds& bounds = w.bounds[1 + i];
       bounds = box_field_bounds(model, mid, w.axis, w.sign);
-      if (!bounds.usable) continue;
-      const bool mid_ok = taylor_point(model, mid.centre(), w.axis, w.sign, w.point[1 + i]);
-      if (mid_ok) w.mid |= 1u << i;
-      for (int j = 0; j < 8; ++j) {
-        const GridCoord f{first.x + 2 * (j & 1), first.y + 2 * ((j >> 1) & 1), first.z + 2 * (j >> 2)};
-        const Aabb fine = corner_box(view.grid, b, f, 2);
-        if (mid_ok &&
-            (!taylor_may_leave_unsettled(w.point[1 + i], bounds, mid.centre(), fine, level, straddles) || straddles))
-          continue;
-        const int index = f.x / 2 + 4 * (f.y / 2) + 16 * (f.z / 2);
-        if (taylor_point(model, fine.centre(), w.axis, w.sign, w.point[9 + index])) w.fine |= uint64_t(1) << index;
-      }
+      if (bounds.usable && taylor_point(model, mid.centre(), w.axis, w.sign, w.point[1 + i])) w.mid |= 1u << i;
     }
   }
 
@@ -211,7 +192,7 @@ struct BlockWindingPass {
   // w − w* at corner `local` (at x) from the finest centre that holds it, or NaN.
   GWNRT_HD static float estimate(const MeshGrid& grid, const GridCoord& b, const BlockWinding& w,
                                  const GridCoord& local, const vec3& x, int jumps, float level) {
-    TaylorCentre c[3];
+    TaylorCentre c[2];
     const int n = taylor_centres(w, local, c);
     for (int i = 0; i < n; ++i) {
       const float f = taylor_estimate(*c[i].point, *c[i].bounds, jumps, x - c[i].centre(grid, b), level);
@@ -357,10 +338,10 @@ struct HermitePass {
     const BlockWinding& w = block_winding[slot];
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const GridCoord l = local_coord(uint32_t(corner % kBlockItems));
-    TaylorCentre c[3];
+    TaylorCentre c[2];
     const int n = taylor_centres(w, l, c);
     int i = 0;
-    while (i < n && l[axis] % c[i].span == c[i].span - 1) ++i;  // the edge leaves the bounds' box
+    while (i < n && l[axis] % c[i].count == c[i].count - 1) ++i;  // the edge leaves the bounds' box
     if (i == n) return false;
     out.point = *c[i].point;
     out.bounds = *c[i].bounds;
