@@ -666,6 +666,39 @@ TEST(SignedDistance, SameAnswerWhateverElseIsAsked) {
   }
 }
 
+// Without the sign (the mesh report's distances to S), the magnitude of the signed answer, bit
+// for bit, on the sheet and the smooth pieces, and on points of M itself (where w alone would
+// take the tree's sum).
+TEST(SignedDistance, UnsignedIsTheMagnitudeOfTheSigned) {
+  for (const bool hemisphere : {true, false}) {
+    const GwnModel model = build_model(hemisphere ? make_hemisphere(16, 64) : test::load_test_mesh("bunny_holes.obj"));
+    const ModelView view = model.view();
+    Aabb box = model.bounds();
+    const vec3 centre = box.centre(), half = 0.6f * (box.hi - box.lo);
+    box = {centre - half, centre + half};
+    test::Random rng(29);
+    std::vector<vec3> points;
+    for (int k = 0; k < 5000; ++k) points.push_back(rng.in_box(box));
+    for (int k = 0; k < 500; ++k) {  // on M's triangles
+      const uint32_t t = uint32_t(rng.index(int(view.triangles.triangle_count)));
+      const vec3* v = view.triangles.vertices + 3 * t;
+      const float a = rng.uniform(0, 1), b = rng.uniform(0, 1 - a);
+      points.push_back(v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0]));
+    }
+    const WindingOptions winding{resolve_point_method(view, WindingMethod::kAuto), TaylorOptions{}};
+    size_t smooth = 0, sheet = 0;
+    for (const vec3& x : points) {
+      const SignedDistance with_sign = signed_distance(view, x, 0.5f, winding);
+      const SignedDistance without = signed_distance(view, x, 0.5f, winding, nullptr, false);
+      EXPECT_EQ(without.distance, std::fabs(with_sign.distance)) << str(x);
+      EXPECT_EQ(without.piece, with_sign.piece) << str(x);
+      (with_sign.piece == DistancePiece::kSheet ? sheet : smooth) += 1;
+    }
+    EXPECT_GT(smooth, 10u) << (hemisphere ? "hemisphere" : "bunny_holes");
+    EXPECT_GT(sheet, 500u) << (hemisphere ? "hemisphere" : "bunny_holes");
+  }
+}
+
 TEST(SignedDistance, BadNewtonOptionsAndLevelsAreRefused) {
   const GwnModel model = build_model(make_hemisphere(8, 32));
   const ModelView v = model.view();

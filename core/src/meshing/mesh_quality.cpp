@@ -25,6 +25,7 @@
 #include "gwnrt/geometry/exact_predicates.h"
 #include "gwnrt/geometry/triangle_tree.h"
 #include "gwnrt/query/batch.h"
+#include "gwnrt/sdf/signed_distance.h"
 #include "meshing/disjoint_sets.h"
 
 namespace gwnrt {
@@ -408,19 +409,14 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
       for (const uint32_t i : vertices) samples.push_back(pos[i]);
     }
   }
+  // |sdf| at each sample, its sign never read: without w where the sheet distance is the answer.
   std::vector<float> to_surface(samples.size());
   {
-    // In batches: a PointResult is a few hundred bytes, a million of them would be most of the
-    // memory the rest of the report needs.
-    constexpr size_t kBatch = 1 << 16;
-    std::vector<PointResult> results;
-    for (size_t b = 0; b < samples.size(); b += kBatch) {
-      const size_t m = std::min(kBatch, samples.size() - b);
-      results.resize(m);
-      if (Status s = evaluate_points(model, std::span<const vec3>(samples).subspan(b, m), request, results); !s.ok())
-        return s;
-      for (size_t i = 0; i < m; ++i) to_surface[b + i] = std::fabs(results[i].sdf.distance);
-    }
+    const WindingOptions winding{resolve_point_method(view, request.method), request.taylor};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i)
+        to_surface[i] = signed_distance(view, samples[i], request.level, winding, nullptr, false).distance;
+    });
   }
   result.output_samples = samples.size();
   for (const float d : to_surface) {

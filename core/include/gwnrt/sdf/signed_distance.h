@@ -184,9 +184,13 @@ struct SignedDistance {
 //    is computed only where the smooth estimate wins and lies closer than M.
 // `sample`, when given, holds w, ∇w and H_w at x (a caller that needs them anyway); otherwise
 // they are evaluated here, only as far as needed: w alone, then ∇w, then H_w (a second
-// traversal, where d₂ must compete: rare, as smooth pieces win only close to them).
+// traversal, where d₂ must compete: rare, as smooth pieces win only close to them). With
+// `with_sign` false the distance is |sdf|, and where the sheet distance is the answer no w is
+// evaluated at all (the mesh report's points on the output: on a CAD part's faces they lie on M
+// to round-off, where w takes the tree's sum at the cone's beta).
 GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x, float level,
-                                               const WindingOptions& winding, const WindingSample* sample = nullptr) {
+                                               const WindingOptions& winding, const WindingSample* sample = nullptr,
+                                               bool with_sign = true) {
   SignedDistance out;
   const NearestPrimitive sheet = unsigned_distance(m.sheets, x);
   out.sheet_distance = sheet.distance;
@@ -198,6 +202,10 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
   }
   if (level_set_distance_bound(m, x, level, winding.taylor.beta, sheet.distance) >= sheet.distance) {
     // Whatever the caller already has, the answer here is the sheet distance.
+    if (!with_sign) {
+      out.distance = sheet.distance;
+      return out;
+    }
     const float w = sample ? sample->w : evaluate_winding(m, x, winding).w;
     out.distance = copysignf(sheet.distance, level - w);
     return out;
@@ -225,7 +233,7 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
       }
     }
   }
-  out.distance = copysignf(best, level - s.w);
+  out.distance = with_sign ? copysignf(best, level - s.w) : best;
   return out;
 }
 
