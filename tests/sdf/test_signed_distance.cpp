@@ -639,18 +639,24 @@ TEST(SignedDistance, ModelBuiltWithoutSheetsRefusesSdfUntilClassified) {
   for (size_t i = 0; i < points.size(); ++i) EXPECT_EQ(results[i].sdf.distance, expected[i].sdf.distance) << i;
 }
 
+// Points uniform in the model's box grown by a fifth on each side.
+std::vector<vec3> points_around(const GwnModel& model, int count, test::Random& rng) {
+  Aabb box = model.bounds();
+  const vec3 centre = box.centre(), half = 0.6f * (box.hi - box.lo);
+  box = {centre - half, centre + half};
+  std::vector<vec3> points;
+  for (int k = 0; k < count; ++k) points.push_back(rng.in_box(box));
+  return points;
+}
+
 TEST(SignedDistance, SameAnswerWhateverElseIsAsked) {
   // signed_distance evaluates w, ∇w and H_w only as far as it needs them, unless the request
   // asks for them anyway (w, sdf1/sdf2), when it is handed the full sample: the two paths must
   // give the same sdf, bit for bit, on an open mesh with smooth pieces and on a real one.
   for (const bool hemisphere : {true, false}) {
     const GwnModel model = build_model(hemisphere ? make_hemisphere(16, 64) : test::load_test_mesh("bunny_holes.obj"));
-    Aabb box = model.bounds();
-    const vec3 centre = box.centre(), half = 0.6f * (box.hi - box.lo);
-    box = {centre - half, centre + half};
     test::Random rng(23);
-    std::vector<vec3> points;
-    for (int k = 0; k < 3000; ++k) points.push_back(rng.in_box(box));
+    const std::vector<vec3> points = points_around(model, 3000, rng);
     const std::vector<PointResult> alone = evaluate(model, points, sdf_request(kFieldSignedDistance));
     const std::vector<PointResult> with_w = evaluate(model, points, sdf_request(kFieldSignedDistance | kFieldW));
     const std::vector<PointResult> with_pseudo =
@@ -673,12 +679,8 @@ TEST(SignedDistance, UnsignedIsTheMagnitudeOfTheSigned) {
   for (const bool hemisphere : {true, false}) {
     const GwnModel model = build_model(hemisphere ? make_hemisphere(16, 64) : test::load_test_mesh("bunny_holes.obj"));
     const ModelView view = model.view();
-    Aabb box = model.bounds();
-    const vec3 centre = box.centre(), half = 0.6f * (box.hi - box.lo);
-    box = {centre - half, centre + half};
     test::Random rng(29);
-    std::vector<vec3> points;
-    for (int k = 0; k < 5000; ++k) points.push_back(rng.in_box(box));
+    std::vector<vec3> points = points_around(model, 5000, rng);
     for (int k = 0; k < 500; ++k) {  // on M's triangles
       const uint32_t t = uint32_t(rng.index(int(view.triangles.triangle_count)));
       const vec3* v = view.triangles.vertices + 3 * t;
