@@ -219,15 +219,24 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   WideBvh bvh;
   if (Status s = build_wide_bvh(bounds, 4, bvh); !s.ok()) return s;
   // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
+  // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
+  // corners by nine integer compares rather than nine of three floats each.
+  std::vector<uint32_t> vertex_id;
+  weld_positions(pos, vertex_id);
   std::vector<exact::Triangle> tri(n);
   std::vector<exact::PlaneFilter> plane(n);
   std::vector<Aabb> box(n);
   std::vector<uint32_t> input(n);
+  std::vector<uvec3> corner_id(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const uint32_t b = bvh.primitive_order[i];
     input[i] = ids[b];
     box[i] = bounds[b];
-    for (int k = 0; k < 3; ++k) tri[i][k] = pos[mesh.triangles[ids[b]][k]];
+    const uvec3 v = mesh.triangles[ids[b]];
+    for (int k = 0; k < 3; ++k) {
+      tri[i][k] = pos[v[k]];
+      corner_id[i][k] = vertex_id[v[k]];
+    }
     plane[i] = exact::PlaneFilter(tri[i]);
   });
 
@@ -275,8 +284,15 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
           }
           // Each unordered pair once: the later one in leaf order is tested from the earlier.
           const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
+          const uvec3 p = corner_id[i];
           for (size_t j = first; j < last; ++j) {
-            if (!q.overlaps(box[j]) || exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j]) ||
+            if (!q.overlaps(box[j])) continue;
+            int match[3];
+            for (int k = 0; k < 3; ++k) {
+              const uint32_t c = corner_id[j][k];
+              match[k] = c == p[0] ? 0 : (c == p[1] ? 1 : (c == p[2] ? 2 : -1));
+            }
+            if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], match) ||
                 !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
               continue;
             ++local;
