@@ -258,17 +258,8 @@ TEST(MeshQualitySelfIntersection, ClosedMeshesAndDefects) {
   }
   // As soups (three vertices of its own per triangle) both count the same: corners are shared by
   // position, not by index.
-  const auto soup = [](const SurfaceMesh& m) {
-    SurfaceMesh out;
-    for (const uvec3& t : m.triangles) {
-      const uint32_t first = uint32_t(out.positions.size());
-      for (int k = 0; k < 3; ++k) out.positions.push_back(m.positions[t[k]]);
-      out.triangles.push_back({first, first + 1, first + 2});
-    }
-    return out;
-  };
-  EXPECT_EQ(intersections(soup(to_surface(test::make_sphere(5)))), 0u);
-  EXPECT_EQ(intersections(soup(two)), n);
+  EXPECT_EQ(intersections(to_soup(to_surface(test::make_sphere(5)))), 0u);
+  EXPECT_EQ(intersections(to_soup(two)), n);
   // A vertex pushed through the opposite side of the cube.
   SurfaceMesh dent = to_surface(test::make_cube());
   dent.positions[6] = {-0.5f, -0.5f, -1.5f};
