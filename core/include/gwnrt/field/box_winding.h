@@ -39,11 +39,14 @@ inline constexpr int kMaxBoxBoundSegments = 256;
 // the estimate: a point is settled only when its estimate clears the bound by this much.
 inline constexpr float kBoxWindingMargin = 1e-3f;
 
-// The centres' ∇w comes from the cone's clusters expanded beyond this many radii, and is allowed
-// this relative error: the derivatives' own beta (16, a relative 1e-4) made the centres a third of
-// the mesher's time on a scan; at 8 the largest error seen was 0.6% (near the abb STL's 82 loops,
-// 20,000 points; 5% at beta 5), so 2% keeps a margin of three (docs/performance.md).
-inline constexpr float kTaylorPointBeta = 8.0f;
+// The centres' ∇w comes from the cone's clusters expanded beyond w's own beta, and is allowed this
+// relative error plus the margin: where |∇w| is small the relative error grows (13% at beta 5 by
+// the kuka kr150 STL's rim, 1e3 on the nearly closed kr10 even at 8), but the estimate reads the
+// error times the distance from the centre, which stayed below 3.6e-5 at the half-diagonal of a
+// block at 256³ on every real mesh at beta 5 as at 8 (80,000 points each; a floor of round-off),
+// far within the 1e-3 margin. The derivatives' own beta (16) made the centres a third of the
+// mesher's time on a scan, 8 a quarter (docs/performance.md).
+inline constexpr float kTaylorPointBeta = kConeBeta;
 inline constexpr float kTaylorGradientError = 2e-2f;
 
 namespace detail {

@@ -23,12 +23,12 @@ inline constexpr float kRootTolerance = 1e-4f;
 // between crossings shorter than twice this are taken as constant.
 inline constexpr float kCrossingOffset = 1e-3f;
 
-// The cone's beta for a smooth Hermite point's normal: w's own (kConeBeta). Its gradient errors
-// reach a few percent where |∇w| is small, yet from 8 to 5 no vertex of the scan or the abb STL
-// moved by 1e-4 of a cell (a QEF vertex moves by the angle times its distance from the Hermite
-// points), and the normals took a third less; the derivatives' own 16 made them a quarter of the
-// mesher's time on a scan (docs/performance.md).
-inline constexpr float kHermiteNormalBeta = kConeBeta;
+// The cone's beta for a smooth Hermite point's normal: the centres' (kTaylorPointBeta, w's own).
+// From 8 to 5 no vertex of the scan or the abb STL moved by 1e-4 of a cell (a QEF vertex moves
+// by the normal's angle times its distance from the Hermite points), and the normals took a third
+// less; the derivatives' own 16 made them a quarter of the mesher's time on a scan
+// (docs/performance.md).
+inline constexpr float kHermiteNormalBeta = kTaylorPointBeta;
 
 // The root search's w by crossings: the cone's clusters expanded beyond this many radii rather
 // than kConeBeta's 5. It decides only where S crosses an edge, never which edges it crosses (the
