@@ -218,11 +218,11 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   });
   WideBvh bvh;
   if (Status s = build_wide_bvh(bounds, 4, bvh); !s.ok()) return s;
-  // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
-  // corners by nine integer compares rather than nine of three floats each.
+  // corners by their ids.
   std::vector<uint32_t> vertex_id;
   weld_positions(pos, vertex_id);
+  // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
   std::vector<exact::Triangle> tri(n);
   std::vector<exact::PlaneFilter> plane(n);
   std::vector<Aabb> box(n);
@@ -284,15 +284,9 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
           }
           // Each unordered pair once: the later one in leaf order is tested from the earlier.
           const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
-          const uvec3 p = corner_id[i];
           for (size_t j = first; j < last; ++j) {
-            if (!q.overlaps(box[j])) continue;
-            int match[3];
-            for (int k = 0; k < 3; ++k) {
-              const uint32_t c = corner_id[j][k];
-              match[k] = c == p[0] ? 0 : (c == p[1] ? 1 : (c == p[2] ? 2 : -1));
-            }
-            if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], match) ||
+            if (!q.overlaps(box[j]) ||
+                exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], corner_id[i], corner_id[j]) ||
                 !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
               continue;
             ++local;

@@ -420,6 +420,16 @@ GWNRT_HD inline bool apart_beyond_shared(const Triangle& p, const PlaneFilter& f
   return apart_beyond_shared(p, fp, q, fq, q_match);
 }
 
+// The same, matching vertices by ids that are equal only at equal positions (a mesh's indices, or
+// the ids of welded positions): three integer compares a vertex instead of three of floats.
+GWNRT_HD inline bool apart_beyond_shared(const Triangle& p, const PlaneFilter& fp, const Triangle& q,
+                                         const PlaneFilter& fq, const uvec3& p_ids, const uvec3& q_ids) {
+  int q_match[3];
+  for (int k = 0; k < 3; ++k)
+    q_match[k] = q_ids[k] == p_ids[0] ? 0 : (q_ids[k] == p_ids[1] ? 1 : (q_ids[k] == p_ids[2] ? 2 : -1));
+  return apart_beyond_shared(p, fp, q, fq, q_match);
+}
+
 GWNRT_HD inline bool collinear(const vec3& a, const vec3& b, const vec3& c) {
   for (int k = 0; k < 3; ++k)
     if (orient2d(detail::project(a, k), detail::project(b, k), detail::project(c, k)) != 0) return false;

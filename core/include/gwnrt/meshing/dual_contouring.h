@@ -189,7 +189,7 @@ struct BlockWindingPass {
     }
   }
 
-  // w − w* at corner `local` (at x) from the finest centre that holds it, or NaN.
+  // w − w* at corner `local` (at x) from the finer centre that holds it, or NaN.
   GWNRT_HD static float estimate(const MeshGrid& grid, const GridCoord& b, const BlockWinding& w,
                                  const GridCoord& local, const vec3& x, int jumps, float level) {
     TaylorCentre c[2];
@@ -331,7 +331,7 @@ struct HermitePass {
                               view.corner_value_at(n), bounded ? &bound : nullptr);
   }
 
-  // The finest centre of the corner's block whose bounds' box holds the edge (both its ends), and
+  // The finer centre of the corner's block whose bounds' box holds the edge (both its ends), and
   // J at the corner along the block's ray.
   GWNRT_HD bool edge_bound(uint64_t corner, int axis, const vec3& p0, EdgeBound& out) const {
     const uint32_t slot = uint32_t(corner / kBlockItems);
@@ -703,10 +703,7 @@ struct SelfIntersectionPass {
         if (at.x != cell.x || at.y != cell.y || at.z != cell.z) continue;
         if (!box[i].overlaps(box[j])) continue;
         // Shared vertices by index (the filter stays safe for distinct vertices that coincide).
-        const uvec3 a = triangles[id[i]], b = triangles[id[j]];
-        int match[3];
-        for (int k = 0; k < 3; ++k) match[k] = b[k] == a.x ? 0 : (b[k] == a.y ? 1 : (b[k] == a.z ? 2 : -1));
-        if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], match) ||
+        if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], triangles[id[i]], triangles[id[j]]) ||
             !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
           continue;
         ++found;
