@@ -58,18 +58,25 @@ GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local)
 }
 
 // The corners need w exactly only where its sign is in doubt: a column is first evaluated with
-// the cone's clusters expanded beyond kCornerScreenBeta radii, and only the corners within
-// kCornerScreenMargin of the level again at the crossing method's own beta. The expansion's error
-// at beta 2 is about 1e-3 (docs/design.md §2), so the margin is ten times that; off it the sign,
-// which is all the mesh's topology reads, is the exact one.
+// the cone's clusters expanded beyond kCornerScreenBeta radii, the corners within
+// kCornerScreenMargin of the level again beyond kCornerRefineBeta, and only those within
+// kCornerRefineMargin of it at the crossing method's own beta. The expansion's error is about
+// 1e-3 at beta 2 (docs/design.md §2) and within 1e-4 at 3 (edge_hermite.h); each margin is ten
+// times or more its error, so off them the sign, which is all the mesh's topology reads, is the
+// exact one. On a scan most corners in doubt are by its rim, where w at beta 5 costs three times
+// w at 3 (docs/performance.md).
 inline constexpr float kCornerScreenBeta = 2.0f;
 inline constexpr float kCornerScreenMargin = 2e-2f;
+inline constexpr float kCornerRefineBeta = kRootSearchConeBeta;
+inline constexpr float kCornerRefineMargin = 2e-3f;
 
-// w at a corner from M's jumps ahead of it: screened, then exact near the level.
+// w at a corner from M's jumps ahead of it: screened, refined, then exact near the level.
 GWNRT_HD inline float corner_winding_value(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
                                            float level) {
-  const float w = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerScreenBeta);
-  return fabsf(w - level) < kCornerScreenMargin ? winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps) : w;
+  const float screened = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerScreenBeta);
+  if (!(fabsf(screened - level) < kCornerScreenMargin)) return screened;
+  const float refined = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerRefineBeta);
+  return fabsf(refined - level) < kCornerRefineMargin ? winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps) : refined;
 }
 
 // The axis ray a block's corners take: the one by which its centre (corner 4, 4, 4 of the block)

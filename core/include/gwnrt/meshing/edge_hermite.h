@@ -16,19 +16,15 @@ inline constexpr int kMaxEdgeCrossings = 256;
 // Steps of the bracketed root search on a smooth piece: Illinois' regula falsi halves the
 // bracket at least every third step, so 60 steps take any bracket below float round-off.
 inline constexpr int kMaxRootSteps = 60;
-// The root is found to this fraction of the edge: far below the 0.05 cell the output promises.
+// The root is found to this fraction of the edge, far below the 0.05 cell the output promises:
+// the search stops once its bracket is this narrow or the secant through its ends puts the root
+// this near its last point (regula falsi closes in from one side; on a scan that took 2.8
+// values a root instead of 6.8, docs/performance.md).
 inline constexpr float kRootTolerance = 1e-4f;
 // w is sampled this fraction of the edge before a crossing of M, for its value on the near
 // side (continuous up to the crossing: the cone's field and the other triangles'); intervals
 // between crossings shorter than twice this are taken as constant.
 inline constexpr float kCrossingOffset = 1e-3f;
-
-// The cone's beta for a smooth Hermite point's normal: the centres' (kTaylorPointBeta, w's own).
-// From 8 to 5 no vertex of the scan or the abb STL moved by 1e-4 of a cell (a QEF vertex moves
-// by the normal's angle times its distance from the Hermite points), and the normals took a third
-// less; the derivatives' own 16 made them a quarter of the mesher's time on a scan
-// (docs/performance.md).
-inline constexpr float kHermiteNormalBeta = kTaylorPointBeta;
 
 // The root search's w by crossings: the cone's clusters expanded beyond this many radii rather
 // than kConeBeta's 5. It decides only where S crosses an edge, never which edges it crosses (the
@@ -37,6 +33,13 @@ inline constexpr float kHermiteNormalBeta = kTaylorPointBeta;
 // (docs/performance.md). An edge whose corners' signs its walk does not reproduce is walked again
 // with the exact w.
 inline constexpr float kRootSearchConeBeta = 3.0f;
+
+// The cone's beta for a smooth Hermite point's normal, of which only the direction is read: the
+// root search's. From 5 to 3 no vertex of the scan moved by 1e-3 of a cell for it (a QEF vertex
+// moves by the normal's angle times its distance from the Hermite points; 8 to 5 moved none by
+// 1e-4), and the scan's edges took a fifth less; the derivatives' own 16 made the normals a
+// quarter of the mesher's time on a scan (docs/performance.md).
+inline constexpr float kHermiteNormalBeta = kRootSearchConeBeta;
 
 enum class HermiteKind : uint8_t { kSheet = 0, kSmooth = 1, kFallback = 2 };
 
@@ -68,6 +71,10 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
     t = fb != fa ? tb - fb * (tb - ta) / (fb - fa) : 0.5f * (ta + tb);
     if (!(t > ta && t < tb)) t = 0.5f * (ta + tb);
     const float ft = value(t);
+    if (fabsf(ft) * (tb - ta) <= kRootTolerance * h * fabsf(fb - fa)) {  // the secant's root within tolerance
+      ta = tb = t;
+      break;
+    }
     if ((ft > 0.0f) == a_inside) {
       ta = t;
       fa = ft;
