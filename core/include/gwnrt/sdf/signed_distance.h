@@ -181,7 +181,8 @@ struct SignedDistance {
 //    only with κd₁ > 4, where the quadratic model's correction would exceed its first-order
 //    term fourfold and it no longer describes w.
 //  - ρ only matters when it exceeds the estimate; as ρ <= dist(x, M) <= the sheet distance, it
-//    is computed only where the smooth estimate wins and lies closer than M.
+//    is read only where the smooth estimate wins and lies closer than M, its level-set part the
+//    one the first test computed.
 // `sample`, when given, holds w, ∇w and H_w at x (a caller that needs them anyway); otherwise
 // they are evaluated here, only as far as needed: w alone, then ∇w, then H_w (a second
 // traversal, where d₂ must compete: rare, as smooth pieces win only close to them). With
@@ -200,7 +201,8 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
     out.first_order = pseudo_distance(sample->w, sample->gradient, level);
     out.second_order = curvature_corrected_distance(sample->w, sample->gradient, sample->hessian, level);
   }
-  if (level_set_distance_bound(m, x, level, winding.taylor.beta, sheet.distance) >= sheet.distance) {
+  const float level_set_bound = level_set_distance_bound(m, x, level, winding.taylor.beta, sheet.distance);
+  if (level_set_bound >= sheet.distance) {
     // Whatever the caller already has, the answer here is the sheet distance.
     if (!with_sign) {
       out.distance = sheet.distance;
@@ -225,7 +227,9 @@ GWNRT_HD inline SignedDistance signed_distance(const ModelView& m, const vec3& x
       out.piece = DistancePiece::kSmooth;
       const float mesh_distance = unsigned_distance(m.triangles, x).distance;
       if (best < mesh_distance) {
-        const float rho = harnack_lower_bound(m, x, level, winding.taylor.beta, mesh_distance);
+        // harnack_lower_bound's ρ, its level-set bound the one above (φ summed fully there, as
+        // the sheet distance it was asked against is at least the mesh distance).
+        const float rho = min_of(level_set_bound, mesh_distance);
         if (rho > best) {
           best = rho;
           out.piece = DistancePiece::kHarnackBound;

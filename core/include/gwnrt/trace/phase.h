@@ -66,6 +66,8 @@ struct PhaseSum {
     }
   }
 
+  GWNRT_HD float near_angle() const { return near_half_angles.angle(); }  // Σ atan2, modulo 2π
+
   // In double: the cone's inner edges (apex to boundary) are singular lines of each of their
   // two triangles' terms, which cancel; in float, the rounding of x relative to such an edge
   // leaves φ with errors of 1e-4 within 1e-3 of it, enough for a step to skip a level there.
@@ -99,11 +101,106 @@ struct PhaseSum {
   }
 };
 
+#if GWNRT_HOST_LANES
+// PhaseSum on the host: a node's far lanes expanded together and their share of the bound taken
+// as lanes (the far clusters' scalar expansion was most of a Harnack step on a scan, and of the
+// mesh report's distances); the near triangles stay PhaseSum's.
+template <bool WantGradient>
+struct PhaseLanes : PhaseSum<WantGradient> {
+  using Base = PhaseSum<WantGradient>;
+  f4 far_omega{}, far_integral{}, far_nearest2 = splat<f4>(kInfinity);
+  f4 far_gradient[3] = {};
+
+  GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
+    const TriangleTreeView& tree = Base::tree;
+    if constexpr (WantGradient)
+      add_far_lanes_with_gradient<2>(
+          tree, [&](auto field) { return load4(field(node)); }, mask, dx, dy, dz, far_omega, far_gradient);
+    else
+      far_omega += lane_select(mask, far_lanes_omega<2>(tree, node, dx, dy, dz), f4{});
+    // As PhaseSum::far: the larger of the distances to the cluster's ball and to its box.
+    float box2[kBvhWidth];
+    box_distances2<true>(tree.bvh.nodes[node], Base::x, box2);
+    f4 ball = lane_sqrt(dx * dx + dy * dy + dz * dz) - load4(tree.expansion[node].radius);
+    ball = lane_select(ball > 0.0f, ball, f4{});
+    const f4 box = load4(box2);
+    const f4 d2 = lane_select(ball * ball > box, ball * ball, box);
+    const f4 length = load4(Base::lengths[node].length);
+    const auto counted = mask & (length > 0.0f);
+    far_integral += lane_select(counted, length / d2, f4{});
+    far_nearest2 = lane_select(counted & (d2 < far_nearest2), d2, far_nearest2);
+  }
+#if defined(__AVX__)
+  UnwrappedAngleSumT<d4, l4> near_angles{};
+
+  // w alone: a leaf's near triangles four at a time in double, PhaseSum::near's terms (the near
+  // triangles' sums were most of a query once the far lanes went together).
+  GWNRT_FORCEINLINE void near_leaf(uint32_t first, uint32_t count) requires(!WantGradient) {
+    for (uint32_t done = 0; done < count; done += 4) near_quad(first + done, count - done < 4 ? count - done : 4);
+  }
+  GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
+    const vec3* v = Base::tree.vertices + 3 * first;
+    const uint32_t last = count - 1;
+    const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
+    d4 g[3][3];  // apex, a, b relative to x; lanes past the leaf repeat its last triangle
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - double(Base::x[k]);
+    const d4 l0 = lane_sqrt(g[0][0] * g[0][0] + g[0][1] * g[0][1] + g[0][2] * g[0][2]);
+    const d4 l1 = lane_sqrt(g[1][0] * g[1][0] + g[1][1] * g[1][1] + g[1][2] * g[1][2]);
+    const d4 l2 = lane_sqrt(g[2][0] * g[2][0] + g[2][1] * g[2][1] + g[2][2] * g[2][2]);
+    const d4 c0 = g[1][1] * g[2][2] - g[1][2] * g[2][1], c1 = g[1][2] * g[2][0] - g[1][0] * g[2][2],
+             c2 = g[1][0] * g[2][1] - g[1][1] * g[2][0];  // g1 × g2
+    const d4 d01 = g[0][0] * g[1][0] + g[0][1] * g[1][1] + g[0][2] * g[1][2];
+    const d4 d12 = g[1][0] * g[2][0] + g[1][1] * g[2][1] + g[1][2] * g[2][2];
+    const d4 d20 = g[2][0] * g[0][0] + g[2][1] * g[0][1] + g[2][2] * g[0][2];
+    const l4 used = l4{0, 1, 2, 3} < int64_t(count);
+    const d4 zero{};
+    // Unused lanes: the factor 0, which has no angle.
+    near_angles.add(lane_select(used, g[0][0] * c0 + g[0][1] * c1 + g[0][2] * c2, zero),
+                    lane_select(used, solid_angle_denominator(l0, l1, l2, d01, d12, d20), zero));
+    const d4 cross2 = c0 * c0 + c1 * c1 + c2 * c2;
+    for (uint32_t l = 0; l < count; ++l) {
+      const ConeSegment segment = Base::segments[first + l];
+      if (!(segment.length > 0.0f)) continue;
+      Base::integral +=
+          segment_inverse_square_integral(float(l1[l] * l2[l]), float(d12[l]), float(cross2[l]), segment.length);
+      // e = g2 − g1: g1·e = d12 − l1², g2·e = l2² − d12.
+      const bool inside = d12[l] - l1[l] * l1[l] < 0.0 && l2[l] * l2[l] - d12[l] > 0.0;
+      const float end2 = float(l1[l] < l2[l] ? l1[l] * l1[l] : l2[l] * l2[l]);
+      const float dist2 = inside ? float(cross2[l]) * segment.inverse_length2 : end2;
+      Base::nearest2 = dist2 < Base::nearest2 ? dist2 : Base::nearest2;
+    }
+  }
+  float near_angle() const {
+    UnwrappedAngleSum lanes;
+    add_lanes_to(near_angles, lanes);
+    return float(atan2(lanes.im, lanes.re)) + Base::near_angle();
+  }
+#endif
+
+  // The lanes folded into PhaseSum's sums.
+  GWNRT_FORCEINLINE void fold() {
+    Base::far_field.omega += lane_sum(far_omega);
+    Base::integral += lane_sum(far_integral);
+    for (int l = 0; l < 4; ++l) Base::nearest2 = min_of(Base::nearest2, far_nearest2[l]);
+    if constexpr (WantGradient)
+      for (int k = 0; k < 3; ++k) Base::far_field.gradient[k] += lane_sum(far_gradient[k]);
+  }
+};
+#endif
+
 template <bool WantGradient>
 GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta, bool exact) {
   // The exact reference reads every triangle as near: the bound from each segment alone.
+#if GWNRT_HOST_LANES
+  PhaseLanes<WantGradient> sum{{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}}};
+  visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
+  sum.fold();
+#else
   PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}};
   visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
+#endif
   PhaseSample out;
   float w;
   if (exact) {
@@ -112,7 +209,7 @@ GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta,
     out.gradient = vec3(s.gradient);
   } else {
     // Ω/4π, the near part as Σ atan2 / 2π taken modulo 1 all at once.
-    w = sum.far_field.omega * kInv4Pi + sum.near_half_angles.angle() * float(0.5 / kPi);
+    w = sum.far_field.omega * kInv4Pi + sum.near_angle() * float(0.5 / kPi);
     out.gradient = (sum.far_field.gradient + vec3(sum.near_gradient.total())) * kInv4Pi;
   }
   out.phi = w - floorf(w);
