@@ -186,8 +186,13 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
 }
 
 // The lanes of a node whose boxes overlap b, as bits (empty lanes have inverted boxes and fail):
-// all four without a branch, so that they are compared as one vector.
+// all four compared as one vector.
 inline unsigned overlapping_lanes(const WideNode& node, const Aabb& b) {
+#if GWNRT_HOST_LANES
+  i4 in = i4{} - 1;
+  for (int a = 0; a < 3; ++a) in &= (load4(node.lo[a]) <= b.hi[a]) & (splat<f4>(b.lo[a]) <= load4(node.hi[a]));
+  return lane_bits(in);
+#else
   unsigned mask = 0;
   for (int l = 0; l < kBvhWidth; ++l) {
     bool in = true;
@@ -195,6 +200,7 @@ inline unsigned overlapping_lanes(const WideNode& node, const Aabb& b) {
     mask |= unsigned(in) << l;
   }
   return mask;
+#endif
 }
 
 Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
