@@ -392,6 +392,15 @@ void check_bounds_on(const char* name, const Mesh& mesh, uint32_t seed, const in
       EXPECT_LE(std::fabs(wrap_turns(double(sg.phi) - s.phi)), 1e-6) << where;
       EXPECT_NEAR(sg.boundary_distance, s.boundary_distance, 1e-6 * s.boundary_distance) << where;
       EXPECT_NEAR(sg.gradient_bound, s.gradient_bound, 1e-6 * s.gradient_bound) << where;
+      // The device's sums (one lane and one near triangle at a time) give the host's lanes' φ, R
+      // and K to float round-off (K is then rounded up by 1e-5, hence 2e-5 for it).
+      detail::PhaseSum<false> scalar{
+          view.cone, view.cone_boundary_lengths, view.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}};
+      visit_multipole(view.cone, x, 2.0f, scalar);
+      const float scalar_w = scalar.far_field.omega * kInv4Pi + scalar.near_angle() * float(0.5 / kPi);
+      EXPECT_LE(std::fabs(wrap_turns(double(scalar_w) - s.phi)), 1e-6) << where;
+      EXPECT_NEAR(std::sqrt(scalar.nearest2), s.boundary_distance, 1e-6 * s.boundary_distance) << where;
+      EXPECT_NEAR(scalar.integral * kInv4Pi, s.gradient_bound, 2e-5 * s.gradient_bound) << where;
 
       // (a) A lower bound on the distance to ∂M (1e-5: float products and one square root), tight
       // to a factor 2 everywhere (a little over: a spanned loop's clusters mix rim triangles with
