@@ -192,11 +192,8 @@ struct ConeCrossingLanes {
   }
   GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
     const vec3* v = cone.vertices + 3 * first;
-    const uint32_t last = count - 1;
-    const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
-    d4 g[3][3];  // lanes past the leaf repeat its last triangle
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - x[k];
+    d4 g[3][3];
+    lane_triangle_corners(v, count, x, g);
     const LaneTangent<d4> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     const l4 lane{0, 1, 2, 3};
     const l4 used = lane < int64_t(count);

@@ -333,10 +333,13 @@ struct TaylorSum {
 
 #if GWNRT_HOST_LANES
 // Van Oosterom–Strackee's tangent (solid_angle.h) of triangles given by their corners relative
-// to x, a lane per triangle, and the product of the corners' lengths (the scale of its round-off).
+// to x, a lane per triangle, and the product of the corners' lengths (the scale of its round-off);
+// with the terms of the edge b -> c it was made of (a cone triangle's segment of ∂M, phase.h):
+// |b|, |c|, b·c and |b × c|² (unread, the compiler drops them).
 template <class V>
 struct LaneTangent {
   V numerator, denominator, length_product;
+  V lb, lc, bc, cross2;
 };
 template <class V>
 GWNRT_FORCEINLINE LaneTangent<V> lane_solid_angle_tangent(const V a[3], const V b[3], const V c[3]) {
@@ -346,8 +349,21 @@ GWNRT_FORCEINLINE LaneTangent<V> lane_solid_angle_tangent(const V a[3], const V 
   const V bc0 = b[1] * c[2] - b[2] * c[1], bc1 = b[2] * c[0] - b[0] * c[2], bc2 = b[0] * c[1] - b[1] * c[0];
   const V ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2],
           ca = c[0] * a[0] + c[1] * a[1] + c[2] * a[2];
-  return {a[0] * bc0 + a[1] * bc1 + a[2] * bc2, solid_angle_denominator(la, lb, lc, ab, bc, ca), la * lb * lc};
+  return {
+      a[0] * bc0 + a[1] * bc1 + a[2] * bc2, solid_angle_denominator(la, lb, lc, ab, bc, ca), la * lb * lc, lb, lc, bc,
+      bc0 * bc0 + bc1 * bc1 + bc2 * bc2};
 }
+
+#if defined(__AVX__)
+// The corners of triangles [v, v + 3·count) (count 1 to 4, three corners each) relative to x,
+// g[j][k] coordinate k of corner j, a lane per triangle: lanes past count repeat the last one.
+GWNRT_FORCEINLINE void lane_triangle_corners(const vec3* v, uint32_t count, const dvec3& x, d4 g[3][3]) {
+  const uint32_t last = count - 1;
+  const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - x[k];
+}
+#endif
 
 // Near triangles collected until a lane vector of Width is full: corners[3 * j + k][lane] is
 // coordinate k of corner j.

@@ -68,6 +68,21 @@ struct PhaseSum {
 
   GWNRT_HD float near_angle() const { return near_half_angles.angle(); }  // Σ atan2, modulo 2π
 
+  // The segment a -> b of near triangle t (a and b at lengths l1 and l2 from x, with a·b = d12 and
+  // |a × b|² = cross2 relative to x; `inside`: x projects inside it): its share of the bound, and
+  // its distance (float is plenty for both). An inner triangle of a spanned loop carries none
+  // (length 0).
+  GWNRT_HD void add_segment(uint32_t t, double l1, double l2, double d12, float cross2, bool inside) {
+    const ConeSegment segment = segments[t];
+    if (!(segment.length > 0.0f)) return;
+    integral += segment_inverse_square_integral(float(l1 * l2), float(d12), cross2, segment.length);
+    // Without branches (which of the three is nearest varies from segment to segment): the
+    // nearer endpoint, or the line when x projects inside the segment.
+    const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
+    const float dist2 = inside ? cross2 * segment.inverse_length2 : end2;
+    nearest2 = dist2 < nearest2 ? dist2 : nearest2;
+  }
+
   // In double: the cone's inner edges (apex to boundary) are singular lines of each of their
   // two triangles' terms, which cancel; in float, the rounding of x relative to such an edge
   // leaves φ with errors of 1e-4 within 1e-3 of it, enough for a step to skip a level there.
@@ -81,20 +96,8 @@ struct PhaseSum {
     const double d12 = glm::dot(g1, g2);
     const SolidAngleTangent<double> tangent = solid_angle_tangent(g0, g1, g2, l0, l1, l2, c12, d12);
     near_half_angles.add({float(tangent.numerator), float(tangent.denominator)});
-    // The segment a -> b: its share of the bound, and its distance (float is plenty for both).
-    // An inner triangle of a spanned loop carries none (length 0).
-    const ConeSegment segment = segments[t];
-    if (segment.length > 0.0f) {
-      const dvec3 e = g2 - g1;
-      const float c2 = float(glm::dot(c12, c12));
-      integral += segment_inverse_square_integral(float(l1 * l2), float(d12), c2, segment.length);
-      // Without branches (which of the three is nearest varies from segment to segment): the
-      // nearer endpoint, or the line when x projects inside the segment.
-      const bool inside = glm::dot(g1, e) < 0.0 && glm::dot(g2, e) > 0.0;
-      const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
-      const float dist2 = inside ? c2 * segment.inverse_length2 : end2;
-      nearest2 = dist2 < nearest2 ? dist2 : nearest2;
-    }
+    const dvec3 e = g2 - g1;
+    add_segment(t, l1, l2, d12, float(glm::dot(c12, c12)), glm::dot(g1, e) < 0.0 && glm::dot(g2, e) > 0.0);
     // In double: the cone's long inner edges carry large Biot–Savart terms that cancel between
     // neighbours, and in float that cancellation bends normals above a flat cap by 1e-2.
     if constexpr (WantGradient) near_gradient.add(corners, continues);
@@ -139,37 +142,17 @@ struct PhaseLanes : PhaseSum<WantGradient> {
     for (uint32_t done = 0; done < count; done += 4) near_quad(first + done, count - done < 4 ? count - done : 4);
   }
   GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
-    const vec3* v = Base::tree.vertices + 3 * first;
-    const uint32_t last = count - 1;
-    const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
-    d4 g[3][3];  // apex, a, b relative to x; lanes past the leaf repeat its last triangle
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - double(Base::x[k]);
-    const d4 l0 = lane_sqrt(g[0][0] * g[0][0] + g[0][1] * g[0][1] + g[0][2] * g[0][2]);
-    const d4 l1 = lane_sqrt(g[1][0] * g[1][0] + g[1][1] * g[1][1] + g[1][2] * g[1][2]);
-    const d4 l2 = lane_sqrt(g[2][0] * g[2][0] + g[2][1] * g[2][1] + g[2][2] * g[2][2]);
-    const d4 c0 = g[1][1] * g[2][2] - g[1][2] * g[2][1], c1 = g[1][2] * g[2][0] - g[1][0] * g[2][2],
-             c2 = g[1][0] * g[2][1] - g[1][1] * g[2][0];  // g1 × g2
-    const d4 d01 = g[0][0] * g[1][0] + g[0][1] * g[1][1] + g[0][2] * g[1][2];
-    const d4 d12 = g[1][0] * g[2][0] + g[1][1] * g[2][1] + g[1][2] * g[2][2];
-    const d4 d20 = g[2][0] * g[0][0] + g[2][1] * g[0][1] + g[2][2] * g[0][2];
+    d4 g[3][3];  // apex, a, b relative to x
+    lane_triangle_corners(Base::tree.vertices + 3 * first, count, dvec3(Base::x), g);
+    const LaneTangent<d4> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     const l4 used = l4{0, 1, 2, 3} < int64_t(count);
     const d4 zero{};
     // Unused lanes: the factor 0, which has no angle.
-    near_angles.add(lane_select(used, g[0][0] * c0 + g[0][1] * c1 + g[0][2] * c2, zero),
-                    lane_select(used, solid_angle_denominator(l0, l1, l2, d01, d12, d20), zero));
-    const d4 cross2 = c0 * c0 + c1 * c1 + c2 * c2;
+    near_angles.add(lane_select(used, tangent.numerator, zero), lane_select(used, tangent.denominator, zero));
     for (uint32_t l = 0; l < count; ++l) {
-      const ConeSegment segment = Base::segments[first + l];
-      if (!(segment.length > 0.0f)) continue;
-      Base::integral +=
-          segment_inverse_square_integral(float(l1[l] * l2[l]), float(d12[l]), float(cross2[l]), segment.length);
-      // e = g2 − g1: g1·e = d12 − l1², g2·e = l2² − d12.
-      const bool inside = d12[l] - l1[l] * l1[l] < 0.0 && l2[l] * l2[l] - d12[l] > 0.0;
-      const float end2 = float(l1[l] < l2[l] ? l1[l] * l1[l] : l2[l] * l2[l]);
-      const float dist2 = inside ? float(cross2[l]) * segment.inverse_length2 : end2;
-      Base::nearest2 = dist2 < Base::nearest2 ? dist2 : Base::nearest2;
+      const double l1 = tangent.lb[l], l2 = tangent.lc[l], d12 = tangent.bc[l];
+      // e = b − a: a·e = d12 − l1², b·e = l2² − d12.
+      Base::add_segment(first + l, l1, l2, d12, float(tangent.cross2[l]), d12 - l1 * l1 < 0.0 && l2 * l2 - d12 > 0.0);
     }
   }
   float near_angle() const {
