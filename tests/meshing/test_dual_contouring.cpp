@@ -39,6 +39,52 @@ TEST(MeshingCorners, WindingAlongAnAxisIsEachPointsOwn) {
   }
 }
 
+// A block's columns walked as one lattice: each line's jumps are exactly those of its own walk,
+// also where lines run through the cube's edges and vertices and in its faces' planes (the
+// lattice on the cube's own coordinates, where only the tie-break decides).
+TEST(MeshingCorners, LatticeJumpsAreEachLinesOwn) {
+  int crossed = 0;
+  for (const char* name : {"bunny_holes.obj", "bunny.obj", "teapot.obj", "cube"}) {
+    const bool cube = std::string(name) == "cube";
+    const GwnModel model = test::build_model(cube ? test::make_cube() : test::load_test_mesh(name));
+    const ModelView view = model.view();
+    test::Random random(17);
+    const Aabb box = model.bounds();
+    for (int lattice = 0; lattice < 200; ++lattice) {
+      const int axis = random.index(3);
+      const float sign = random.index(2) ? 1.0f : -1.0f;
+      // The cube: steps of 1/2 from -2, so that lines meet its vertices, edges and faces.
+      const float step = cube ? 0.5f : random.uniform(0.002f, 0.03f) * glm::length(box.hi - box.lo);
+      const vec3 origin =
+          cube ? vec3(-2.0f) + 0.5f * vec3(float(random.index(3)), float(random.index(3)), float(random.index(3)))
+               : random.in_box(box);
+      float u[8], v[8], along[8];
+      for (int k = 0; k < 8; ++k) {
+        u[k] = origin[(axis + 1) % 3] + step * float(k);
+        v[k] = origin[(axis + 2) % 3] + step * float(k);
+        along[k] = origin[axis] + sign * step * float(k);
+      }
+      int lattice_jumps[64][8];
+      mesh_jumps_along_axis_lattice(view, u, v, along, axis, sign, lattice_jumps);
+      for (int line = 0; line < 64; ++line) {
+        vec3 points[8];
+        for (int k = 0; k < 8; ++k) {
+          points[k][axis] = along[k];
+          points[k][(axis + 1) % 3] = u[line % 8];
+          points[k][(axis + 2) % 3] = v[line / 8];
+        }
+        int jumps[8];
+        mesh_jumps_along_axis(view, points, axis, sign, jumps);
+        for (int k = 0; k < 8; ++k) {
+          ASSERT_EQ(lattice_jumps[line][k], jumps[k]) << name << " lattice " << lattice << " line " << line;
+          crossed += jumps[k] != 0;
+        }
+      }
+    }
+  }
+  EXPECT_GT(crossed, 10000) << "the lines hardly met the meshes";
+}
+
 // The corner pass's screened values: the same side of the level as the exact w, whatever the
 // level, also levels within a hair of w itself.
 TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {

@@ -392,6 +392,58 @@ GWNRT_HD void mesh_jumps_along_axis(const ModelView& m, const vec3 (&points)[Cou
   });
 }
 
+// The same for the N × N lines of a lattice at once (a block's columns): line i + N·j runs
+// through the points at u[i] along axis (axis + 1) % 3, v[j] along (axis + 2) % 3 and along[k]
+// along `axis` (ascending along sign · e_axis; the lines share them, as a grid's corners do).
+// Each line's jumps are exactly mesh_jumps_along_axis's for its points: its crossings are tested
+// by its own frame, in every leaf its walk would open, but M is walked once for the lattice.
+template <int N, int Count>
+GWNRT_HD void mesh_jumps_along_axis_lattice(const ModelView& m, const float (&u)[N], const float (&v)[N],
+                                            const float (&along)[Count], int axis, float sign,
+                                            int (&mesh_jumps)[N * N][Count]) {
+  const int au = (axis + 1) % 3, av = (axis + 2) % 3;
+  vec3 direction(0.0f), lo, hi;
+  direction[axis] = sign;
+  lo[axis] = hi[axis] = along[0];
+  lo[au] = u[0];
+  hi[au] = u[N - 1];
+  lo[av] = v[0];
+  hi[av] = v[N - 1];
+  const RayFrame beam = make_ray_frame(lo, direction);
+  RayFrame line = beam;  // its origin moved to each line's in turn
+  float offset[Count];
+  for (int k = 0; k < Count; ++k) offset[k] = (along[k] - along[0]) * sign;
+  for (int c = 0; c < N * N; ++c)
+    for (int k = 0; k < Count; ++k) mesh_jumps[c][k] = 0;
+  const vec3* vertices = m.triangles.vertices;
+  visit_axis_beam_leaves(m.triangles.bvh, beam, lo, hi, [&](uint32_t first, uint32_t count) {
+    for (uint32_t t = first; t < first + count; ++t) {
+      const vec3 &p0 = vertices[3 * t], &p1 = vertices[3 * t + 1], &p2 = vertices[3 * t + 2];
+      // A line whose origin lies outside the triangle's range along u or v misses it (ray.h).
+      const float u0 = min_of(p0[au], min_of(p1[au], p2[au])), u1 = max_of(p0[au], max_of(p1[au], p2[au]));
+      const float v0 = min_of(p0[av], min_of(p1[av], p2[av])), v1 = max_of(p0[av], max_of(p1[av], p2[av]));
+      uint32_t in_u = 0, in_v = 0;
+      for (int i = 0; i < N; ++i) {
+        in_u |= uint32_t(u0 <= u[i] && u[i] <= u1) << i;
+        in_v |= uint32_t(v0 <= v[i] && v[i] <= v1) << i;
+      }
+      if (in_u == 0) continue;
+      for (uint32_t jm = in_v; jm != 0; jm &= jm - 1) {
+        const int j = lowest_set_bit(jm);
+        line.origin[av] = v[j];
+        for (uint32_t im = in_u; im != 0; im &= im - 1) {
+          const int i = lowest_set_bit(im);
+          line.origin[au] = u[i];
+          float tc;
+          int jump;
+          if (!triangle_crossing<true>(line, p0, p1, p2, tc, jump) || !(tc >= 0.0f)) continue;
+          for (int k = 0; k < Count; ++k) mesh_jumps[i + N * j][k] += tc >= offset[k] ? jump : 0;
+        }
+      }
+    }
+  });
+}
+
 // w at x given M's jumps ahead of it along (axis, sign): the cone traversed along the same
 // direction, its clusters expanded beyond cone_beta radii. A point exactly on C takes
 // winding_number_crossing's nudged evaluation.

@@ -143,6 +143,24 @@ GWNRT_HD GWNRT_FORCEINLINE void lane_entries(const WideNode& node, const RayFram
   for (int l = 0; l < kBvhWidth; ++l) entry[l] = t0[l] <= t1[l] ? t0[l] : kInfinity;
 }
 
+// The same for a ray along a coordinate axis (a frame with sx = sy = 0): kx and ky compared, not
+// divided (a lane whose kx or ky range misses the origin holds no triangle the ray crosses:
+// axis_box_meets below), the slab along kz as above.
+GWNRT_HD GWNRT_FORCEINLINE void axis_lane_entries(const WideNode& node, const RayFrame& f, float t_lo, float t_hi,
+                                                  float entry[kBvhWidth]) {
+  const float ox = f.origin[f.kx], oy = f.origin[f.ky], oz = f.origin[f.kz], inv = f.inv_direction[f.kz];
+  for (int l = 0; l < kBvhWidth; ++l) {
+    const float a = (node.lo[f.kz][l] - oz) * inv, b = (node.hi[f.kz][l] - oz) * inv;
+    float near = a < b ? a : b, far = a < b ? b : a;
+    near -= fabsf(near) * 4e-7f;
+    far += fabsf(far) * 4e-7f;
+    const float t0 = near > t_lo ? near : t_lo, t1 = far < t_hi ? far : t_hi;
+    const bool in_xy =
+        node.lo[f.kx][l] <= ox && ox <= node.hi[f.kx][l] && node.lo[f.ky][l] <= oy && oy <= node.hi[f.ky][l];
+    entry[l] = in_xy && t0 <= t1 ? t0 : kInfinity;
+  }
+}
+
 struct CrossingHit {
   float t = kInfinity;
   uint32_t index = kEmptyLane;  // leaf-order triangle index
@@ -152,6 +170,9 @@ struct CrossingHit {
 // The first crossing after (t_after, index_after) in lexicographic (t, leaf index) order, with
 // t <= t_max; index_after = kEmptyLane means "from t_after on, inclusive". Visiting crossings
 // one by one this way meets each exactly once, also several at the same t (stacked copies).
+// AxisAligned: the ray runs along an axis, and the lanes and triangles take the axis tests,
+// which give the same answers for less work.
+template <bool AxisAligned = false>
 GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, const RayFrame& f, float t_after,
                                    uint32_t index_after, float t_max, CrossingHit& out) {
   out = CrossingHit{};
@@ -168,7 +189,10 @@ GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, con
     NearFirstEntry inner[kBvhWidth];
     int inner_count = 0;
     float entry[kBvhWidth];
-    lane_entries(node, f, t_after, best_t, entry);
+    if constexpr (AxisAligned)
+      axis_lane_entries(node, f, t_after, best_t, entry);
+    else
+      lane_entries(node, f, t_after, best_t, entry);
     for (int l = 0; l < kBvhWidth; ++l) {
       if (node.child[l] == kEmptyLane || entry[l] == kInfinity) continue;
       if (node.count[l] == 0) {
@@ -178,7 +202,8 @@ GWNRT_HD inline bool next_crossing(const BvhView& bvh, const vec3* vertices, con
       for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) {
         float t;
         int jump;
-        if (!triangle_crossing(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump)) continue;
+        if (!triangle_crossing<AxisAligned>(f, vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2], t, jump))
+          continue;
         const bool after = t > t_after || (t == t_after && (index_after == kEmptyLane || i > index_after));
         const bool better = t < best_t || (t == best_t && (!found || i < out.index));
         if (after && better) {
@@ -346,6 +371,53 @@ GWNRT_HD inline void visit_axis_crossings(const BvhView& bvh, const vec3* vertic
         continue;
       }
       visit_axis_leaf(vertices, node.child[l], node.count[l], f, t_min, visit);
+    }
+  }
+}
+
+// A bundle of axis rays: frame f's direction, f's origin along kz for all of them, their origins
+// along kx and ky anywhere in [lo, hi] (indexed by axis). visit_leaf(first, count) is called
+// once for every leaf that any of them meets at t >= 0 by axis_ray_meets_lane (and maybe for a
+// few others): each ray then tests its own triangles, and its crossings are the ones its own
+// walk would find, for one walk instead of one a ray.
+namespace detail {
+template <class V>
+GWNRT_HD GWNRT_FORCEINLINE auto axis_beam_box_meets(V lo_x, V hi_x, V lo_y, V hi_y, V lo_z, V hi_z, const RayFrame& f,
+                                                    const vec3& lo, const vec3& hi) {
+  const float oz = f.origin[f.kz];
+  const auto in_xy = (lo_x <= hi[f.kx]) & (lo[f.kx] <= hi_x) & (lo_y <= hi[f.ky]) & (lo[f.ky] <= hi_y);
+  const auto ahead = f.sz > 0.0f ? hi_z - oz >= 0.0f : oz - lo_z >= 0.0f;
+  return in_xy & ahead;
+}
+}  // namespace detail
+
+template <class LeafVisitor>
+GWNRT_HD inline void visit_axis_beam_leaves(const BvhView& bvh, const RayFrame& f, const vec3& lo, const vec3& hi,
+                                            LeafVisitor&& visit_leaf) {
+  if (bvh.node_count == 0) return;
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const WideNode& node = bvh.nodes[stack[--sp]];
+#if GWNRT_HOST_LANES
+    uint32_t mask = lane_bits(detail::axis_beam_box_meets<f4>(load4(node.lo[f.kx]), load4(node.hi[f.kx]),
+                                                              load4(node.lo[f.ky]), load4(node.hi[f.ky]),
+                                                              load4(node.lo[f.kz]), load4(node.hi[f.kz]), f, lo, hi));
+#else
+    uint32_t mask = 0;
+    for (int l = 0; l < kBvhWidth; ++l)
+      mask |=
+          uint32_t(detail::axis_beam_box_meets<float>(node.lo[f.kx][l], node.hi[f.kx][l], node.lo[f.ky][l],
+                                                      node.hi[f.ky][l], node.lo[f.kz][l], node.hi[f.kz][l], f, lo, hi))
+          << l;
+#endif
+    for (; mask != 0; mask &= mask - 1) {
+      const int l = lowest_set_bit(mask);
+      if (node.count[l] == 0)
+        stack[sp++] = node.child[l];
+      else
+        visit_leaf(node.child[l], node.count[l]);
     }
   }
 }

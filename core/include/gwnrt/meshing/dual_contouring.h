@@ -209,11 +209,77 @@ struct BlockWindingPass {
   }
 };
 
+// The ray a slot's corners take and whether M's jumps along it give them (the exact method):
+// the bound's ray where BlockWindingPass made one, else block_ray.
+struct CornerRay {
+  int axis = 2;
+  float sign = 1.0f;
+  bool exact = false;
+  const BlockWinding* bound = nullptr;
+};
+GWNRT_HD inline CornerRay corner_ray(const SparseGridView& view, const ModelView& model, const WindingOptions& winding,
+                                     const BlockWinding* block_winding, uint32_t slot) {
+  CornerRay r;
+  r.exact = resolve_winding_method(model, winding.method) == WindingMethod::kCrossing;
+  if (!r.exact) return r;
+  if (block_winding && block_winding[slot].any()) {
+    r.bound = block_winding + slot;
+    r.axis = r.bound->axis;
+    r.sign = r.bound->sign;
+    return r;
+  }
+  const BlockRay ray = block_ray(view.grid, model.bounds, view.grid.block_of_index(view.block_of_slot[slot]));
+  r.axis = ray.axis;
+  r.sign = ray.sign;
+  return r;
+}
+
+// The corner of a slot's column (column = l[u] + kBlockCells · l[v]) that is k-th along its ray.
+GWNRT_HD inline GridCoord column_corner(uint32_t column, int k, int axis, float sign) {
+  const int32_t cu = int32_t(column % kBlockCells), cv = int32_t(column / kBlockCells);
+  const int32_t ck = sign > 0.0f ? k : kBlockCells - 1 - k;
+  // Built whole, not by l[axis] = ...: a store by a runtime index read back at once stalls.
+  return axis == 0 ? GridCoord{ck, cu, cv} : (axis == 1 ? GridCoord{cv, ck, cu} : GridCoord{cu, cv, ck});
+}
+
+// Per slot, with the exact method: M's jumps ahead of each corner along the slot's ray, for all
+// its columns in one walk (mesh_jumps_along_axis_lattice), stored in the corner's value by its
+// bits until CornerColumnPass reads them and writes the value over them.
+struct CornerJumpsPass {
+  SparseGridView view;
+  ModelView model;
+  WindingOptions winding;
+  const BlockWinding* block_winding;  // per slot, or nullptr
+  float* corner_value;
+
+  GWNRT_HD void operator()(uint64_t slot) const {
+    const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
+    if (!ray.exact) return;
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+    const int u = (ray.axis + 1) % 3, v = (ray.axis + 2) % 3;
+    float cu[kBlockCells], cv[kBlockCells], along[kBlockCells];
+    for (int k = 0; k < kBlockCells; ++k) {
+      // Corner (k, k, k): a corner's coordinate along an axis depends on its index along it alone.
+      const vec3 diagonal =
+          view.grid.corner_position({b.x * kBlockCells + k, b.y * kBlockCells + k, b.z * kBlockCells + k});
+      cu[k] = diagonal[u];
+      cv[k] = diagonal[v];
+      along[ray.sign > 0.0f ? k : kBlockCells - 1 - k] = diagonal[ray.axis];
+    }
+    int jumps[kBlockCells * kBlockCells][kBlockCells];
+    mesh_jumps_along_axis_lattice(model, cu, cv, along, ray.axis, ray.sign, jumps);
+    float* out = corner_value + slot * kBlockItems;
+    for (uint32_t column = 0; column < kBlockCells * kBlockCells; ++column)
+      for (int k = 0; k < kBlockCells; ++k)
+        out[local_index(column_corner(column, k, ray.axis, ray.sign))] = bits_float(uint32_t(jumps[column][k]));
+  }
+};
+
 // One column of a slot's corners (item = slot · kBlockCells² + column): w − w* where needed, NaN
-// elsewhere. With the exact method M's crossings are found once for the column's kBlockCells
-// corners (mesh_jumps_along_axis), along the block's ray (block_ray): fewer crossings and nodes
-// on the way than a fixed +z. Where the block's bound (BlockWindingPass) settles a corner's sign,
-// its value is that estimate (the sign exact, the size within the bound); else the cone is summed.
+// elsewhere. With the exact method M's crossings ahead of each corner are CornerJumpsPass's,
+// along the block's ray (corner_ray): fewer crossings and nodes on the way than a fixed +z.
+// Where the block's bound (BlockWindingPass) settles a corner's sign, its value is that
+// estimate (the sign exact, the size within the bound); else the cone is summed.
 struct CornerColumnPass {
   SparseGridView view;
   ModelView model;
@@ -227,39 +293,30 @@ struct CornerColumnPass {
     const uint32_t column = uint32_t(item % (kBlockCells * kBlockCells));
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const uint32_t needed_from = view.needed_from[slot];
-    const bool exact = resolve_winding_method(model, winding.method) == WindingMethod::kCrossing;
-    const BlockWinding* bound = exact && block_winding && block_winding[slot].any() ? block_winding + slot : nullptr;
-    BlockRay ray{2, 1.0f};
-    if (bound)
-      ray = {bound->axis, bound->sign};
-    else if (exact)
-      ray = block_ray(view.grid, model.bounds, b);
+    const CornerRay ray = corner_ray(view, model, winding, block_winding, slot);
+    const BlockWinding* bound = ray.bound;
     const int axis = ray.axis;
     const float sign = ray.sign;
-    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     GridCoord local[kBlockCells];
     bool needed[kBlockCells];
-    bool all = exact;
     for (int k = 0; k < kBlockCells; ++k) {
-      GridCoord l;
-      l[u] = int32_t(column % kBlockCells);
-      l[v] = int32_t(column / kBlockCells);
-      l[axis] = sign > 0.0f ? k : kBlockCells - 1 - k;  // ascending along the ray
+      const GridCoord l = column_corner(column, k, axis, sign);  // ascending along the ray
       local[k] = l;
       const GridCoord c{b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z};
       needed[k] = c.x <= view.grid.cells[0] && c.y <= view.grid.cells[1] && c.z <= view.grid.cells[2] &&
                   corner_needed(needed_from, l);
-      all = all && needed[k];
     }
     float* out = corner_value + uint64_t(slot) * kBlockItems;
     const auto position = [&](const GridCoord& l) {
       return view.grid.corner_position({b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z});
     };
-    if (all || bound) {
+    if (ray.exact) {
       vec3 points[kBlockCells];
       int jumps[kBlockCells];
-      for (int k = 0; k < kBlockCells; ++k) points[k] = position(local[k]);
-      mesh_jumps_along_axis(model, points, axis, sign, jumps);
+      for (int k = 0; k < kBlockCells; ++k) {
+        points[k] = position(local[k]);
+        jumps[k] = int(float_bits(out[local_index(local[k])]));
+      }
       for (int k = 0; k < kBlockCells; ++k) {
         float f = __builtin_nanf("");
         if (needed[k]) {

@@ -134,7 +134,7 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
   bool capped = true;
   for (int k = 0; k < kMaxEdgeCrossings; ++k) {
     CrossingHit hit;
-    const bool found = next_crossing(m.triangles.bvh, m.triangles.vertices, frame, t_start, index_after, h, hit);
+    const bool found = next_crossing<true>(m.triangles.bvh, m.triangles.vertices, frame, t_start, index_after, h, hit);
     const float t_end = found ? hit.t : h;
     float f_end = f1, f_after_settled = __builtin_nanf("");
     if (found) {

@@ -296,6 +296,9 @@ void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOpt
     backend.parallel_for(g.slots, BlockWindingPass{g.view, model, options.level, g.block_winding.data()});
     block_winding = g.block_winding.data();
   }
+  if (resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing)
+    backend.parallel_for(g.slots, CornerJumpsPass{g.view, model, options.winding, block_winding, g.corner_value.data()},
+                         16);
   const uint64_t columns = g.slots * kBlockCells * kBlockCells;
   if (options.progress_total) options.progress_total->fetch_add(columns);
   backend.parallel_for(
