@@ -266,6 +266,46 @@ TEST(MeshQualitySelfIntersection, ClosedMeshesAndDefects) {
   EXPECT_GT(intersections(dent), 0u);
 }
 
+// The grid's pairs against every pair by the exact test, on soups of small triangles with a few
+// wide ones (which take the BVH), corners shared with earlier triangles (the filters' shared-vertex
+// cases), and copies on a plane (coplanar pairs).
+TEST(MeshQualitySelfIntersection, GridFindsEveryPair) {
+  test::Random random(31);
+  uint64_t total = 0;
+  for (int round = 0; round < 6; ++round) {
+    SurfaceMesh m;
+    const int n = 400;
+    for (int t = 0; t < n; ++t) {
+      const float size = random.index(20) == 0 ? 0.6f : random.uniform(0.01f, 0.08f);
+      const vec3 at = random.in_box({vec3(0.0f), vec3(1.0f)});
+      const uint32_t base = uint32_t(m.positions.size());
+      for (int k = 0; k < 3; ++k) {
+        vec3 p = at + size * random.unit();
+        if (round % 2 == 1) p.z = 0.5f;  // all in one plane
+        m.positions.push_back(p);
+      }
+      uvec3 tri(base, base + 1, base + 2);
+      if (t > 0 && random.index(3) == 0) tri[0] = m.triangles[size_t(random.index(t))][random.index(3)];
+      m.triangles.push_back(tri);
+    }
+    std::vector<glm::uvec2> pairs;
+    const uint64_t count = intersections(m, &pairs);
+    std::vector<glm::uvec2> expected;
+    for (uint32_t i = 0; i < uint32_t(n); ++i)
+      for (uint32_t j = i + 1; j < uint32_t(n); ++j) {
+        const exact::Triangle p = {m.positions[m.triangles[i][0]], m.positions[m.triangles[i][1]],
+                                   m.positions[m.triangles[i][2]]};
+        const exact::Triangle q = {m.positions[m.triangles[j][0]], m.positions[m.triangles[j][1]],
+                                   m.positions[m.triangles[j][2]]};
+        if (exact::triangles_intersect(p, q)) expected.push_back({i, j});
+      }
+    EXPECT_EQ(count, expected.size()) << "round " << round;
+    EXPECT_EQ(pairs, expected) << "round " << round;
+    total += count;
+  }
+  EXPECT_GT(total, 500u) << "too few pairs to tell";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Distances
 

@@ -1,5 +1,5 @@
 // The mesh quality report (gwnrt/meshing/mesh_quality.h): topology by sorted undirected edges and
-// union-find, self-intersections by a BVH over the triangles and the exact pair test
+// union-find, self-intersections by a grid of cells over the triangles and the exact pair test
 // (exact_predicates.cpp), distances to S by the model's signed distance one way and the tracer's
 // hits and a BVH over the output the other.
 #include "gwnrt/meshing/mesh_quality.h"
@@ -203,6 +203,47 @@ inline unsigned overlapping_lanes(const WideNode& node, const Aabb& b) {
 #endif
 }
 
+// Which of the kBoxLanes boxes from j on (in box_column: lo x, y, z, hi x, y, z) overlap b, as bits.
+#if GWNRT_HOST_LANES
+inline constexpr int kBoxLanes = kNearWidth;
+inline fnear load_lanes(const float* p) {
+  fnear v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline uint32_t overlapping_boxes(const std::array<std::vector<float>, 6>& column, size_t j, const Aabb& b) {
+  inear in = inear{} - 1;
+  for (int a = 0; a < 3; ++a)
+    in &=
+        (load_lanes(column[a].data() + j) <= b.hi[a]) & (splat<fnear>(b.lo[a]) <= load_lanes(column[3 + a].data() + j));
+  return lane_bits(in);
+}
+#else
+inline constexpr int kBoxLanes = 4;
+inline uint32_t overlapping_boxes(const std::array<std::vector<float>, 6>& column, size_t j, const Aabb& b) {
+  uint32_t mask = 0;
+  for (int l = 0; l < kBoxLanes; ++l) {
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in &= (column[a][j + l] <= b.hi[a]) & (b.lo[a] <= column[3 + a][j + l]);
+    mask |= uint32_t(in) << l;
+  }
+  return mask;
+}
+#endif
+// The lanes of the first `left` (all kBoxLanes when more are left).
+inline uint32_t lanes_before(size_t left) {
+  return left >= size_t(kBoxLanes) ? (1u << kBoxLanes) - 1u : (1u << left) - 1u;
+}
+
+// The pairs whose boxes overlap are found on a uniform grid: each triangle no wider than a cell
+// (twice the median triangle's extent, so nearly all of them) is filed under the cell of its box's
+// low corner, and two such boxes that overlap have their low corners within a cell of each other
+// along every axis, so in the same cell or neighbouring ones; the few wider triangles are tested
+// against every triangle by a BVH over them alone. Sorting by cell costs a fraction of a BVH over
+// all of them, and a triangle meets only its neighbours' few (docs/performance.md).
+inline constexpr double kGridCellOverMedianExtent = 2.0;
+inline constexpr double kMaxGridCellsPerAxis = double(1u << 20);  // keys of 60 bits at most
+
 Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
   if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
   const size_t n_all = mesh.triangles.size();
@@ -218,24 +259,60 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   for (size_t t = 0; t < n_all; ++t)
     if (keep[t]) ids.push_back(uint32_t(t));
   const size_t n = ids.size();
+  count = 0;
+  if (pairs) pairs->clear();
+  if (n == 0) return Status::Ok();
+
+  // Boxes and extents (in double: the classification below must not round a width down).
   std::vector<Aabb> bounds(n);
+  std::vector<double> extent(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     for (int k = 0; k < 3; ++k) bounds[i].extend(pos[mesh.triangles[ids[i]][k]]);
+    const dvec3 e = dvec3(bounds[i].hi) - dvec3(bounds[i].lo);
+    extent[i] = std::max(e.x, std::max(e.y, e.z));
   });
-  WideBvh bvh;
-  if (Status s = build_wide_bvh(bounds, 4, bvh); !s.ok()) return s;
+  Aabb all;
+  for (const Aabb& b : bounds) {
+    all.extend(b.lo);
+    all.extend(b.hi);
+  }
+  const dvec3 origin(all.lo), size = dvec3(all.hi) - dvec3(all.lo);
+  std::vector<double> sorted_extent(extent);
+  std::nth_element(sorted_extent.begin(), sorted_extent.begin() + n / 2, sorted_extent.end());
+  double cell = kGridCellOverMedianExtent * sorted_extent[n / 2];
+  cell = std::max(cell, std::max(size.x, std::max(size.y, size.z)) / kMaxGridCellsPerAxis);
+  if (!(cell > 0.0)) cell = 1.0;  // every triangle a point's box: nothing overlaps but at points
+  uint64_t dims[3];
+  for (int a = 0; a < 3; ++a) dims[a] = uint64_t(size[a] / cell) + 1;
+  const auto cell_of = [&](const vec3& lo, int a) {
+    return std::min(uint64_t((double(lo[a]) - origin[a]) / cell), dims[a] - 1);
+  };
+  // Wide: more than a cell (less a margin for the rounding of the cells' coordinates, so that
+  // narrower ones' low corners stay within one cell of each other's).
+  const double narrow = cell * (1.0 - 1e-6);
+  constexpr uint64_t kWide = ~uint64_t(0);
+  std::vector<std::pair<uint64_t, uint32_t>> order(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    const vec3& lo = bounds[i].lo;
+    order[i] = {extent[i] <= narrow ? cell_of(lo, 0) + dims[0] * (cell_of(lo, 1) + dims[1] * cell_of(lo, 2)) : kWide,
+                uint32_t(i)};
+  });
+  tbb::parallel_sort(order.begin(), order.end());
+  size_t n_narrow = n;
+  while (n_narrow > 0 && order[n_narrow - 1].first == kWide) --n_narrow;
+
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
   // corners by their ids.
   std::vector<uint32_t> vertex_id;
   weld_positions(pos, vertex_id);
-  // Triangles and boxes in leaf order, so that a leaf's are adjacent in memory.
+  // Triangles and boxes in cell order, so that a cell's are adjacent in memory.
   std::vector<exact::Triangle> tri(n);
   std::vector<exact::PlaneFilter> plane(n);
   std::vector<Aabb> box(n);
   std::vector<uint32_t> input(n);
   std::vector<uvec3> corner_id(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    const uint32_t b = bvh.primitive_order[i];
+    const uint32_t b = order[i].second;
     input[i] = ids[b];
     box[i] = bounds[b];
     const uvec3 v = mesh.triangles[ids[b]];
@@ -245,67 +322,96 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
     }
     plane[i] = exact::PlaneFilter(tri[i]);
   });
-
-  // Per node and lane, one past the last leaf-order primitive below it (leaves below a lane are
-  // one contiguous run): a query from primitive i looks only at later ones, so it skips lanes
-  // that end before it, most of the tree for most queries.
-  std::vector<std::array<uint32_t, kBvhWidth>> lane_end(bvh.nodes.size());
-  {
-    auto end_of = [&](auto&& self, uint32_t node) -> uint32_t {
-      uint32_t end = 0;
-      for (int l = 0; l < kBvhWidth; ++l) {
-        const WideNode& w = bvh.nodes[node];
-        uint32_t e = 0;
-        if (w.count[l] > 0)
-          e = w.child[l] + w.count[l];
-        else if (w.child[l] != kEmptyLane)
-          e = self(self, w.child[l]);
-        lane_end[node][l] = e;
-        end = std::max(end, e);
-      }
-      return end;
-    };
-    if (n > 0) end_of(end_of, 0);
-  }
+  // The boxes again by coordinate, padded by boxes that overlap nothing, for the lane test below.
+  std::array<std::vector<float>, 6> box_column;
+  for (int c = 0; c < 6; ++c) box_column[c].assign(n + kBoxLanes, c < 3 ? kInfinity : -kInfinity);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    for (int a = 0; a < 3; ++a) {
+      box_column[a][i] = box[i].lo[a];
+      box_column[3 + a][i] = box[i].hi[a];
+    }
+  });
+  // The occupied cells: run r holds [run_begin[r], run_begin[r + 1]) under key run_key[r].
+  std::vector<uint64_t> run_key;
+  std::vector<uint32_t> run_begin;
+  for (size_t i = 0; i < n_narrow; ++i)
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      run_key.push_back(order[i].first);
+      run_begin.push_back(uint32_t(i));
+    }
+  run_begin.push_back(uint32_t(n_narrow));
 
   tbb::combinable<uint64_t> counts([] { return uint64_t(0); });
   tbb::enumerable_thread_specific<std::vector<glm::uvec2>> found;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+  // A pair whose boxes overlap.
+  const auto test = [&](size_t i, size_t j, uint64_t& local, std::vector<glm::uvec2>* local_pairs) {
+    if (exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], corner_id[i], corner_id[j]) ||
+        !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
+      return;
+    ++local;
+    if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
+  };
+
+  // Narrow against narrow: each cell against itself and its 13 neighbours that come later in key
+  // order, so that each pair of cells is met once.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, run_key.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     uint64_t local = 0;
     std::vector<glm::uvec2>* local_pairs = pairs ? &found.local() : nullptr;
-    uint32_t stack[kTraversalStackSize];
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const Aabb& q = box[i];
-      int sp = 0;
-      stack[sp++] = 0;
-      while (sp > 0) {
-        const uint32_t index = stack[--sp];
-        const WideNode& node = bvh.nodes[index];
-        for (unsigned mask = overlapping_lanes(node, q); mask != 0; mask &= mask - 1) {
-          const int l = __builtin_ctz(mask);
-          if (lane_end[index][l] <= i + 1) continue;
-          if (node.count[l] == 0) {
-            stack[sp++] = node.child[l];
-            continue;
-          }
-          // Each unordered pair once: the later one in leaf order is tested from the earlier.
-          const size_t first = std::max<size_t>(node.child[l], i + 1), last = size_t(node.child[l]) + node.count[l];
-          for (size_t j = first; j < last; ++j) {
-            if (!q.overlaps(box[j]) ||
-                exact::apart_beyond_shared(tri[i], plane[i], tri[j], plane[j], corner_id[i], corner_id[j]) ||
-                !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
-              continue;
-            ++local;
-            if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
-          }
+    for (size_t run = r.begin(); run != r.end(); ++run) {
+      const uint64_t key = run_key[run];
+      const int64_t c[3] = {int64_t(key % dims[0]), int64_t(key / dims[0] % dims[1]), int64_t(key / dims[0] / dims[1])};
+      for (int d = 13; d < 27; ++d) {  // offsets (dx, dy, dz) = d's base-3 digits − 1; 13 is (0, 0, 0)
+        const int64_t q[3] = {c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1};
+        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= int64_t(dims[0]) || q[1] >= int64_t(dims[1]) ||
+            q[2] >= int64_t(dims[2]))
+          continue;
+        const uint64_t other = uint64_t(q[0]) + dims[0] * (uint64_t(q[1]) + dims[1] * uint64_t(q[2]));
+        const auto it = std::lower_bound(run_key.begin() + run, run_key.end(), other);
+        if (it == run_key.end() || *it != other) continue;
+        const size_t run2 = size_t(it - run_key.begin());
+        for (size_t i = run_begin[run]; i < run_begin[run + 1]; ++i) {
+          const size_t end = run_begin[run2 + 1];
+          for (size_t j = d == 13 ? i + 1 : run_begin[run2]; j < end; j += kBoxLanes)
+            for (uint32_t m = overlapping_boxes(box_column, j, box[i]) & lanes_before(end - j); m != 0; m &= m - 1)
+              test(i, j + size_t(__builtin_ctz(m)), local, local_pairs);
         }
       }
     }
     counts.local() += local;
   });
+
+  // Wide against every other: each triangle against the wide ones after it.
+  if (n_narrow < n) {
+    std::vector<Aabb> wide_bounds(box.begin() + ptrdiff_t(n_narrow), box.end());
+    WideBvh bvh;
+    if (Status s = build_wide_bvh(wide_bounds, 4, bvh); !s.ok()) return s;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+      uint64_t local = 0;
+      std::vector<glm::uvec2>* local_pairs = pairs ? &found.local() : nullptr;
+      uint32_t stack[kTraversalStackSize];
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        int sp = 0;
+        stack[sp++] = 0;
+        while (sp > 0) {
+          const WideNode& node = bvh.nodes[stack[--sp]];
+          for (unsigned mask = overlapping_lanes(node, box[i]); mask != 0; mask &= mask - 1) {
+            const int l = __builtin_ctz(mask);
+            if (node.count[l] == 0) {
+              stack[sp++] = node.child[l];
+              continue;
+            }
+            for (uint32_t p = node.child[l]; p < node.child[l] + node.count[l]; ++p) {
+              const size_t j = n_narrow + bvh.primitive_order[p];
+              if (j > i && box[i].overlaps(box[j])) test(i, j, local, local_pairs);
+            }
+          }
+        }
+      }
+      counts.local() += local;
+    });
+  }
   count = counts.combine([](uint64_t a, uint64_t b) { return a + b; });
   if (pairs) {
-    pairs->clear();
     for (const auto& v : found) pairs->insert(pairs->end(), v.begin(), v.end());
     std::sort(pairs->begin(), pairs->end(),
               [](const glm::uvec2& a, const glm::uvec2& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
