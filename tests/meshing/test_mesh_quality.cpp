@@ -225,6 +225,13 @@ TEST(MeshQualitySelfIntersection, AnalyticPairs) {
       {"shared vertex, coplanar wedges apart", {vec3(0, 0, 0), vec3(-1, 0, 0), vec3(0, -1, 0)}, false},
       {"shared vertex, coplanar wedges overlap", {vec3(0, 0, 0), vec3(1, 1, 0), vec3(-1, 1, 0)}, true},
       {"shared vertex, touching along an edge line", {vec3(0, 0, 0), vec3(1, 0, 1), vec3(1, 0, -1)}, true},
+      {"shared vertex, coplanar, an edge on the line beyond it",
+       {vec3(0, 0, 0), vec3(-1, 0, 0), vec3(-1, -1, 0)},
+       false},
+      {"shared vertex, coplanar, an edge along the line onto it", {vec3(0, 0, 0), vec3(1, 0, 0), vec3(1, -1, 0)}, true},
+      {"shared vertex, coplanar, a vertex on the line beyond it",
+       {vec3(0, 0, 0), vec3(-1, 0, 0), vec3(0, -1, 0)},
+       false},
       {"duplicate", {vec3(0, 2, 0), vec3(0, 0, 0), vec3(2, 0, 0)}, true},
   };
   for (const Case& c : cases) {

@@ -359,10 +359,22 @@ GWNRT_HD inline bool off_plane(const Triangle& u, const bool* u_shared, const Pl
   return side != 0;
 }
 
+// Whether x, exactly on the line of t's edge (e, f) in projection k, lies beyond the end at
+// `shared` away from the other end: the line is not perpendicular to some projected axis, and
+// along it x and the other end lie strictly on opposite sides of the shared one.
+GWNRT_HD inline bool beyond_edge_end(const Triangle& t, int e, int f, int shared, const vec3& x, int k) {
+  if (orient2d(project(t[e], k), project(t[f], k), project(x, k)) != 0) return false;
+  const glm::vec2 p = project(t[shared], k), q = project(t[shared == e ? f : e], k), y = project(x, k);
+  const int a = q.x != p.x ? 0 : 1;
+  return q[a] != p[a] && y[a] != p[a] && (y[a] < p[a]) == (q[a] > p[a]);
+}
+
 // An edge line of t separates t from u in t's dominant projection (injective on t's plane): t's
 // third vertex strictly on one side, u's vertices strictly on the other but for those shared
-// with the edge's ends (u_match[j]: the vertex of t that u's vertex j is, or −1). Then whatever t
-// and u share lies on that edge's ends.
+// with the edge's ends (u_match[j]: the vertex of t that u's vertex j is, or −1), or, where u
+// shares one end alone, on the line beyond that end (flat regions of a lattice's vertices). Then
+// whatever t and u share lies on that edge's ends: u meets the line's vertical plane, where t has
+// only its edge, in a segment from the shared end away from the edge.
 GWNRT_HD inline bool edge_line_separates(const Triangle& t, const PlaneFilter& t_plane, const Triangle& u,
                                          const int* u_match) {
   const dvec3 n = glm::abs(t_plane.normal);
@@ -373,9 +385,15 @@ GWNRT_HD inline bool edge_line_separates(const Triangle& t, const PlaneFilter& t
   const int s = t_plane.normal[k] > 0.0 ? 1 : -1;
   for (int e = 0; e < 3; ++e) {
     const int f = (e + 1) % 3;
+    const bool shares_e = u_match[0] == e || u_match[1] == e || u_match[2] == e;
+    const bool shares_f = u_match[0] == f || u_match[1] == f || u_match[2] == f;
     bool separated = true;
-    for (int j = 0; j < 3 && separated; ++j)
-      if (u_match[j] != e && u_match[j] != f) separated = orient2d_filtered(t[e], t[f], u[j], k) == -s;
+    for (int j = 0; j < 3 && separated; ++j) {
+      if (u_match[j] == e || u_match[j] == f) continue;
+      const int side = orient2d_filtered(t[e], t[f], u[j], k);
+      separated =
+          side == -s || (side != s && shares_e != shares_f && beyond_edge_end(t, e, f, shares_e ? e : f, u[j], k));
+    }
     if (separated) return true;
   }
   return false;
