@@ -405,6 +405,59 @@ TEST(MeshQualityDistances, ScaledMeshIsAtOnePercent) {
   EXPECT_NEAR(d.hausdorff_to_surface, 0.01 * SphereFixture::kRadius, 1e-6);
 }
 
+// S's points find their nearest output triangles in the grid's rings of cells, among the wide
+// triangles by their own tree, or, beyond the rings, by a tree over all: the same distances
+// whichever finds them. The output: a coarse sphere with a cap cut off (points of S by the hole
+// lie beyond the rings) and every other triangle split in sixteen (the unsplit ones are wide); again
+// with a speck far away, whose grid has too many cells for a map (two rings, looked up by search).
+// (The speck widens the output's box, and with it what counts as a tie for the normals: only the
+// distances are compared.)
+TEST(MeshQualityDistances, TheGridsPathsAgree) {
+  const SphereFixture f;
+  const Mesh coarse = test::make_sphere(3, 0.98f * SphereFixture::kRadius);
+  SurfaceMesh out;
+  out.positions = coarse.positions;
+  int split = 0;
+  for (const uvec3& t : coarse.triangles) {
+    const vec3 c = (coarse.positions[t[0]] + coarse.positions[t[1]] + coarse.positions[t[2]]) / 3.0f;
+    if (c.z > 0.8f) continue;  // the hole
+    const auto split_in_four = [&](auto&& self, const uvec3& s, int depth) -> void {
+      if (depth == 0) {
+        out.triangles.push_back(s);
+        return;
+      }
+      uint32_t m[3];
+      for (int k = 0; k < 3; ++k) {
+        m[k] = uint32_t(out.positions.size());
+        out.positions.push_back(0.5f * (out.positions[s[k]] + out.positions[s[(k + 1) % 3]]));
+      }
+      for (const uvec3& q :
+           {uvec3(s[0], m[0], m[2]), uvec3(m[0], s[1], m[1]), uvec3(m[2], m[1], s[2]), uvec3(m[0], m[1], m[2])})
+        self(self, q, depth - 1);
+    };
+    split_in_four(split_in_four, t, split++ % 2 == 0 ? 0 : 2);  // sixteen pieces: the others are wide
+  }
+  SurfaceMesh speck = out;
+  const uint32_t base = uint32_t(speck.positions.size());
+  speck.positions.insert(speck.positions.end(), {vec3(1e4f, 0, 0), vec3(1e4f + 0.01f, 0, 0), vec3(1e4f, 0.01f, 0)});
+  speck.triangles.push_back({base, base + 1, base + 2});
+  const SurfaceDistances a = distances(f.model, out, 2000, 4000), b = distances(f.model, speck, 2000, 4000);
+  EXPECT_GT(a.hausdorff_from_surface, 0.3);  // the hole's rim is far from S's cap
+  EXPECT_EQ(a.surface_points, b.surface_points);
+  EXPECT_DOUBLE_EQ(a.mean_from_surface, b.mean_from_surface);
+  EXPECT_DOUBLE_EQ(a.hausdorff_from_surface, b.hausdorff_from_surface);
+  // And against the distances to the unsplit sphere with the same hole, within the midpoints'
+  // rounding.
+  SurfaceMesh unsplit;
+  unsplit.positions = coarse.positions;
+  for (const uvec3& t : coarse.triangles)
+    if ((coarse.positions[t[0]] + coarse.positions[t[1]] + coarse.positions[t[2]]).z / 3.0f <= 0.8f)
+      unsplit.triangles.push_back(t);
+  const SurfaceDistances u = distances(f.model, unsplit, 2000, 4000);
+  EXPECT_NEAR(a.mean_from_surface, u.mean_from_surface, 1e-6);
+  EXPECT_NEAR(a.hausdorff_from_surface, u.hausdorff_from_surface, 1e-6);
+}
+
 TEST(MeshQualityDistances, RefusesModelsWithoutMatchingSheetsAndBadInput) {
   const SphereFixture f;
   const SurfaceMesh out = to_surface(f.mesh);

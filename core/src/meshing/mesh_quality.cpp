@@ -243,9 +243,36 @@ inline uint32_t lanes_before(size_t left) {
 // all of them, and a triangle meets only its neighbours' few (docs/performance.md).
 inline constexpr double kGridCellOverMedianExtent = 2.0;
 inline constexpr double kMaxGridCellsPerAxis = double(1u << 20);  // keys of 60 bits at most
+// A map from every cell to its run (16 MiB at most) where the grid has this many cells or fewer,
+// so that a point's rings of cells are looked up directly, out to kMaxRings.
+inline constexpr double kMaxDenseGridCells = double(1u << 22);
+inline constexpr int64_t kMaxRings = 8;
 
-Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
-  if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
+// The mesh's triangles of non-zero area on the uniform grid above, in cell order.
+struct TriangleGrid {
+  std::vector<uint32_t> input;  // grid order -> mesh triangle
+  std::vector<Aabb> box;        // in grid order
+  size_t narrow = 0;            // [0, narrow) filed under their cells, [narrow, size) wider than a cell
+  dvec3 origin{0.0};
+  double cell = 1.0;
+  uint64_t dims[3] = {1, 1, 1};
+  std::vector<uint64_t> run_key;    // the occupied cells, ascending
+  std::vector<uint32_t> run_begin;  // cell run_key[r] holds [run_begin[r], run_begin[r + 1])
+  std::vector<int32_t> dense_run;   // per cell its run or -1, where the cells are few enough
+
+  uint64_t key(uint64_t x, uint64_t y, uint64_t z) const { return x + dims[0] * (y + dims[1] * z); }
+  // The run of cell q (any coordinates), or -1 when it holds none; from: where to start looking.
+  int64_t run_of(const int64_t (&q)[3], size_t from = 0) const {
+    for (int a = 0; a < 3; ++a)
+      if (q[a] < 0 || q[a] >= int64_t(dims[a])) return -1;
+    const uint64_t k = key(uint64_t(q[0]), uint64_t(q[1]), uint64_t(q[2]));
+    if (!dense_run.empty()) return dense_run[k];
+    const auto it = std::lower_bound(run_key.begin() + ptrdiff_t(from), run_key.end(), k);
+    return it == run_key.end() || *it != k ? -1 : int64_t(it - run_key.begin());
+  }
+};
+
+void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   const size_t n_all = mesh.triangles.size();
   const std::vector<vec3>& pos = mesh.positions;
   std::vector<uint8_t> keep(n_all);
@@ -259,10 +286,11 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   for (size_t t = 0; t < n_all; ++t)
     if (keep[t]) ids.push_back(uint32_t(t));
   const size_t n = ids.size();
-  count = 0;
-  if (pairs) pairs->clear();
-  if (n == 0) return Status::Ok();
-
+  g = TriangleGrid{};
+  if (n == 0) {
+    g.run_begin.push_back(0);
+    return;
+  }
   // Boxes and extents (in double: the classification below must not round a width down).
   std::vector<Aabb> bounds(n);
   std::vector<double> extent(n);
@@ -276,46 +304,73 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
     all.extend(b.lo);
     all.extend(b.hi);
   }
-  const dvec3 origin(all.lo), size = dvec3(all.hi) - dvec3(all.lo);
+  g.origin = dvec3(all.lo);
+  const dvec3 size = dvec3(all.hi) - dvec3(all.lo);
   std::vector<double> sorted_extent(extent);
-  std::nth_element(sorted_extent.begin(), sorted_extent.begin() + n / 2, sorted_extent.end());
-  double cell = kGridCellOverMedianExtent * sorted_extent[n / 2];
-  cell = std::max(cell, std::max(size.x, std::max(size.y, size.z)) / kMaxGridCellsPerAxis);
-  if (!(cell > 0.0)) cell = 1.0;  // every triangle a point's box: nothing overlaps but at points
-  uint64_t dims[3];
-  for (int a = 0; a < 3; ++a) dims[a] = uint64_t(size[a] / cell) + 1;
+  std::nth_element(sorted_extent.begin(), sorted_extent.begin() + ptrdiff_t(n / 2), sorted_extent.end());
+  g.cell = kGridCellOverMedianExtent * sorted_extent[n / 2];
+  g.cell = std::max(g.cell, std::max(size.x, std::max(size.y, size.z)) / kMaxGridCellsPerAxis);
+  if (!(g.cell > 0.0)) g.cell = 1.0;  // every triangle a point's box: nothing overlaps but at points
+  for (int a = 0; a < 3; ++a) g.dims[a] = uint64_t(size[a] / g.cell) + 1;
   const auto cell_of = [&](const vec3& lo, int a) {
-    return std::min(uint64_t((double(lo[a]) - origin[a]) / cell), dims[a] - 1);
+    return std::min(uint64_t((double(lo[a]) - g.origin[a]) / g.cell), g.dims[a] - 1);
   };
   // Wide: more than a cell (less a margin for the rounding of the cells' coordinates, so that
   // narrower ones' low corners stay within one cell of each other's).
-  const double narrow = cell * (1.0 - 1e-6);
+  const double narrow = g.cell * (1.0 - 1e-6);
   constexpr uint64_t kWide = ~uint64_t(0);
   std::vector<std::pair<uint64_t, uint32_t>> order(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const vec3& lo = bounds[i].lo;
-    order[i] = {extent[i] <= narrow ? cell_of(lo, 0) + dims[0] * (cell_of(lo, 1) + dims[1] * cell_of(lo, 2)) : kWide,
-                uint32_t(i)};
+    order[i] = {extent[i] <= narrow ? g.key(cell_of(lo, 0), cell_of(lo, 1), cell_of(lo, 2)) : kWide, uint32_t(i)};
   });
   tbb::parallel_sort(order.begin(), order.end());
-  size_t n_narrow = n;
-  while (n_narrow > 0 && order[n_narrow - 1].first == kWide) --n_narrow;
+  g.narrow = n;
+  while (g.narrow > 0 && order[g.narrow - 1].first == kWide) --g.narrow;
+  g.input.resize(n);
+  g.box.resize(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    g.input[i] = ids[order[i].second];
+    g.box[i] = bounds[order[i].second];
+  });
+  for (size_t i = 0; i < g.narrow; ++i)
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      g.run_key.push_back(order[i].first);
+      g.run_begin.push_back(uint32_t(i));
+    }
+  g.run_begin.push_back(uint32_t(g.narrow));
+  const double cells = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]);
+  if (cells <= kMaxDenseGridCells) {
+    g.dense_run.assign(size_t(cells), -1);
+    for (size_t r = 0; r < g.run_key.size(); ++r) g.dense_run[g.run_key[r]] = int32_t(r);
+  }
+}
+
+Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs,
+                                          const TriangleGrid* shared_grid = nullptr) {
+  if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
+  count = 0;
+  if (pairs) pairs->clear();
+  TriangleGrid own_grid;
+  if (!shared_grid) build_triangle_grid(mesh, own_grid);
+  const TriangleGrid& grid = shared_grid ? *shared_grid : own_grid;
+  const size_t n = grid.input.size(), n_narrow = grid.narrow;
+  if (n == 0) return Status::Ok();
+  const std::vector<vec3>& pos = mesh.positions;
+  const std::vector<Aabb>& box = grid.box;
+  const std::vector<uint64_t>& run_key = grid.run_key;
+  const std::vector<uint32_t>& run_begin = grid.run_begin;
 
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
   // corners by their ids.
   std::vector<uint32_t> vertex_id;
   weld_positions(pos, vertex_id);
-  // Triangles and boxes in cell order, so that a cell's are adjacent in memory.
+  // Triangles in cell order, so that a cell's are adjacent in memory.
   std::vector<exact::Triangle> tri(n);
   std::vector<exact::PlaneFilter> plane(n);
-  std::vector<Aabb> box(n);
-  std::vector<uint32_t> input(n);
   std::vector<uvec3> corner_id(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    const uint32_t b = order[i].second;
-    input[i] = ids[b];
-    box[i] = bounds[b];
-    const uvec3 v = mesh.triangles[ids[b]];
+    const uvec3 v = mesh.triangles[grid.input[i]];
     for (int k = 0; k < 3; ++k) {
       tri[i][k] = pos[v[k]];
       corner_id[i][k] = vertex_id[v[k]];
@@ -331,15 +386,6 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
       box_column[3 + a][i] = box[i].hi[a];
     }
   });
-  // The occupied cells: run r holds [run_begin[r], run_begin[r + 1]) under key run_key[r].
-  std::vector<uint64_t> run_key;
-  std::vector<uint32_t> run_begin;
-  for (size_t i = 0; i < n_narrow; ++i)
-    if (i == 0 || order[i].first != order[i - 1].first) {
-      run_key.push_back(order[i].first);
-      run_begin.push_back(uint32_t(i));
-    }
-  run_begin.push_back(uint32_t(n_narrow));
 
   tbb::combinable<uint64_t> counts([] { return uint64_t(0); });
   tbb::enumerable_thread_specific<std::vector<glm::uvec2>> found;
@@ -349,7 +395,8 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
         !exact::triangles_of_nonzero_area_intersect(tri[i], tri[j]))
       return;
     ++local;
-    if (local_pairs) local_pairs->push_back({std::min(input[i], input[j]), std::max(input[i], input[j])});
+    if (local_pairs)
+      local_pairs->push_back({std::min(grid.input[i], grid.input[j]), std::max(grid.input[i], grid.input[j])});
   };
 
   // Narrow against narrow: each cell against itself and its 13 neighbours that come later in key
@@ -359,16 +406,13 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
     std::vector<glm::uvec2>* local_pairs = pairs ? &found.local() : nullptr;
     for (size_t run = r.begin(); run != r.end(); ++run) {
       const uint64_t key = run_key[run];
+      const uint64_t* dims = grid.dims;
       const int64_t c[3] = {int64_t(key % dims[0]), int64_t(key / dims[0] % dims[1]), int64_t(key / dims[0] / dims[1])};
       for (int d = 13; d < 27; ++d) {  // offsets (dx, dy, dz) = d's base-3 digits − 1; 13 is (0, 0, 0)
         const int64_t q[3] = {c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1};
-        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= int64_t(dims[0]) || q[1] >= int64_t(dims[1]) ||
-            q[2] >= int64_t(dims[2]))
-          continue;
-        const uint64_t other = uint64_t(q[0]) + dims[0] * (uint64_t(q[1]) + dims[1] * uint64_t(q[2]));
-        const auto it = std::lower_bound(run_key.begin() + run, run_key.end(), other);
-        if (it == run_key.end() || *it != other) continue;
-        const size_t run2 = size_t(it - run_key.begin());
+        const int64_t found_run = grid.run_of(q, run);
+        if (found_run < 0) continue;
+        const size_t run2 = size_t(found_run);
         for (size_t i = run_begin[run]; i < run_begin[run + 1]; ++i) {
           const size_t end = run_begin[run2 + 1];
           for (size_t j = d == 13 ? i + 1 : run_begin[run2]; j < end; j += kBoxLanes)
@@ -469,7 +513,8 @@ struct SurfacePoint {
 };
 
 Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mesh,
-                                   const SurfaceDistanceOptions& options, SurfaceDistances& out) {
+                                   const SurfaceDistanceOptions& options, SurfaceDistances& out,
+                                   const TriangleGrid* shared_grid = nullptr) {
   if (Status s = validate_surface_mesh(mesh, "surface_distances"); !s.ok()) return s;
   if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
     return {StatusCode::kInvalidMesh, cat("surface_distances: ", mesh.normals.size(), " normals for ",
@@ -581,57 +626,156 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   ray_points = {};
   result.surface_points = surface_points.size();
 
-  // S -> output, through a tree over the output's non-zero-area triangles.
-  Mesh output;
-  output.positions = mesh.positions;
-  output.triangles = mesh.triangles;
-  std::vector<uint32_t> selection;
+  // S -> output: the output's triangles of non-zero area in the 27 cells of the grid around each
+  // point, and the wide ones near it by a tree over them. Where the nearest is not nearer than the
+  // cells' reach (a point far from the output), a tree over all of them.
+  TriangleGrid own_grid;
+  if (!shared_grid) build_triangle_grid(mesh, own_grid);
+  const TriangleGrid& grid = shared_grid ? *shared_grid : own_grid;
+  Mesh output;  // for the trees, where one is needed
+  const auto fill_output = [&] {
+    if (output.triangles.empty()) {
+      output.positions = mesh.positions;
+      output.triangles = mesh.triangles;
+    }
+  };
   Aabb output_box;
-  for (uint32_t t = 0; t < output.triangles.size(); ++t) {
-    const uvec3 v = output.triangles[t];
-    if (is_degenerate_triangle(pos[v[0]], pos[v[1]], pos[v[2]])) continue;
-    selection.push_back(t);
-    for (int k = 0; k < 3; ++k) output_box.extend(pos[v[k]]);
+  for (const Aabb& b : grid.box) {
+    output_box.extend(b.lo);
+    output_box.extend(b.hi);
   }
-  TriangleTree tree;
-  if (Status s = build_triangle_tree(output, selection, 4, tree, TreeMoments::kWithout); !s.ok()) return s;
-  const TriangleTreeView tview = tree.view();
   // Triangles this much nearer or farther than the nearest are equally near to float round-off.
-  const double tie = selection.empty() ? 0.0 : 1e-6 * glm::length(dvec3(output_box.hi) - dvec3(output_box.lo));
+  const double tie = grid.input.empty() ? 0.0 : 1e-6 * glm::length(dvec3(output_box.hi) - dvec3(output_box.lo));
+  TriangleTree wide_tree;
+  if (grid.narrow < grid.input.size()) {
+    const std::vector<uint32_t> wide(grid.input.begin() + ptrdiff_t(grid.narrow), grid.input.end());
+    fill_output();
+    if (Status s = build_triangle_tree(output, wide, 4, wide_tree, TreeMoments::kWithout); !s.ok()) return s;
+  }
+  const TriangleTreeView wide_view = wide_tree.view();
+  const auto closest = [&](uint32_t t, const dvec3& xd) {
+    const uvec3 v = mesh.triangles[t];
+    return closest_point_on_triangle(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]), xd);
+  };
+  // The nearest distance in double over the triangles near enough to matter, then among those as
+  // near to round-off the normal that agrees best with S's. each_near(reach, wide_reach, fn):
+  // fn(triangle) for every triangle of the output within reach() or wide_reach, and maybe others;
+  // the nearest lies within `reach`.
+  const auto measure = [&](const dvec3& xd, const dvec3& ns, auto&& each_near, double reach, double& from,
+                           double& angle) {
+    double best = std::numeric_limits<double>::infinity();
+    each_near([&] { return std::min(best, reach); }, reach,
+              [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); });
+    const double near = best + 2 * tie;
+    angle = std::numeric_limits<double>::infinity();
+    each_near([&] { return near; }, near,
+              [&](uint32_t t) {
+                const ClosestPoint<double> c = closest(t, xd);
+                if (glm::length(c.point - xd) <= best + tie)
+                  angle = std::min(angle, angle_deg(ns, output_normal(mesh, t, c.u, c.v)));
+              });
+    from = best;
+  };
   std::vector<double> from_surface(surface_points.size()), deviation(surface_points.size());
+  std::vector<uint8_t> far(surface_points.size(), 0);  // beyond the rings searched: by a tree
+  tbb::enumerable_thread_specific<std::vector<int64_t>> ring_runs;
+  // Rings of cells looked up directly where the grid has a dense map, else the 27 cells alone.
+  const int64_t max_ring = grid.dense_run.empty() ? 2 : kMaxRings;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const vec3 x = surface_points[k].position;
-      const NearestPrimitive nearest = unsigned_distance(tview, x);
-      if (!(nearest.distance < kInfinity)) {
-        from_surface[k] = std::numeric_limits<double>::infinity();
-        deviation[k] = -1;  // no output: no normal to compare
+      const dvec3 xd(x);
+      std::vector<int64_t>& runs = ring_runs.local();
+      runs.clear();
+      int64_t c[3];
+      for (int a = 0; a < 3; ++a)
+        c[a] = int64_t(std::clamp(std::floor((xd[a] - grid.origin[a]) / grid.cell), -2.0, double(grid.dims[a]) + 1));
+      // The occupied cells at Chebyshev distance `ring` from x's.
+      const auto add_ring = [&](int64_t ring) {
+        for (int64_t dz = -ring; dz <= ring; ++dz)
+          for (int64_t dy = -ring; dy <= ring; ++dy)
+            for (int64_t dx = -ring; dx <= ring; dx += std::abs(dz) == ring || std::abs(dy) == ring ? 1 : 2 * ring) {
+              const int64_t q[3] = {c[0] + dx, c[1] + dy, c[2] + dz};
+              const int64_t run = grid.run_of(q);
+              if (run >= 0) runs.push_back(run);
+            }
+      };
+      // fn(triangle) for the narrow ones in the cells of `runs` from `first` on whose boxes lie
+      // within reach(), read before each, and the wide ones within wide_reach (none when negative).
+      const auto each_near_from = [&](size_t first, auto&& reach, double wide_reach, auto&& fn) {
+        for (size_t i = first; i < runs.size(); ++i)
+          for (uint32_t j = grid.run_begin[size_t(runs[i])]; j < grid.run_begin[size_t(runs[i]) + 1]; ++j) {
+            const Aabb& b = grid.box[j];
+            const dvec3 gap = glm::max(glm::max(dvec3(b.lo) - xd, xd - dvec3(b.hi)), dvec3(0.0));
+            const double r = reach();
+            if (glm::dot(gap, gap) <= r * r) fn(grid.input[j]);
+          }
+        if (wide_reach >= 0.0)
+          for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
+                        [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
+      };
+      const auto each_near = [&](auto&& reach, double wide_reach, auto&& fn) {
+        each_near_from(0, reach, wide_reach, fn);
+      };
+      // How near a narrow triangle filed beyond ring r of x's cell can be: its box starts beyond
+      // cell c + r + 1 along some axis, or, being narrower than a cell, ends before cell
+      // c − r + 1 starts; less a margin for the rounding of the cells' coordinates. Once the
+      // nearest is nearer, the rings up to r hold all that matters. x's own cell first: the
+      // nearest found early prunes the rest.
+      const auto beyond = [&](int64_t r) {
+        double gap = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a) {
+          const double at = xd[a] - grid.origin[a];
+          gap = std::min(gap, std::min(double(c[a] + r + 1) * grid.cell - at, at - double(c[a] - r + 1) * grid.cell));
+        }
+        return gap - 1e-3 * grid.cell;
+      };
+      double best = std::numeric_limits<double>::infinity();
+      const auto nearer = [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); };
+      add_ring(0);
+      int64_t ring = 0;
+      for (size_t first = 0; !(best + 2 * tie < beyond(ring)) && ring < max_ring;) {
+        add_ring(++ring);
+        each_near_from(
+            first, [&] { return best; }, -1.0, nearer);
+        first = runs.size();
+      }
+      if (!(best + 2 * tie < beyond(ring))) {
+        far[k] = 1;
         continue;
       }
-      // In double: the nearest distance over the triangles near enough to matter, then among
-      // those as near to round-off the normal that agrees best with S's.
-      const dvec3 xd(x);
-      auto closest = [&](uint32_t i) {
-        return closest_point_on_triangle(dvec3(tview.vertices[3 * i]), dvec3(tview.vertices[3 * i + 1]),
-                                         dvec3(tview.vertices[3 * i + 2]), xd);
-      };
-      const float reach = float(nearest.distance + 2 * tie);
-      double best = std::numeric_limits<double>::infinity();
-      for_each_near(tview, x, reach, [&](uint32_t i) { best = std::min(best, glm::length(closest(i).point - xd)); });
-      if (!(best < std::numeric_limits<double>::infinity())) best = nearest.distance;  // unreachable
-      const dvec3 ns(surface_points[k].normal);
-      double angle = std::numeric_limits<double>::infinity();
-      for_each_near(tview, x, reach, [&](uint32_t i) {
-        const ClosestPoint<double> c = closest(i);
-        if (glm::length(c.point - xd) <= best + tie)
-          angle = std::min(angle, angle_deg(ns, output_normal(mesh, tview.triangle_ids[i], c.u, c.v)));
-      });
-      if (!(angle < std::numeric_limits<double>::infinity()))
-        angle = angle_deg(ns, output_normal(mesh, nearest.primitive, nearest.u, nearest.v));
-      from_surface[k] = best;
-      deviation[k] = angle;
+      measure(xd, dvec3(surface_points[k].normal), each_near, best + 2 * tie, from_surface[k], deviation[k]);
     }
   });
+  if (std::find(far.begin(), far.end(), uint8_t(1)) != far.end()) {
+    TriangleTree tree;
+    fill_output();
+    if (Status s = build_triangle_tree(output, grid.input, 4, tree, TreeMoments::kWithout); !s.ok()) return s;
+    const TriangleTreeView tview = tree.view();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t k = r.begin(); k != r.end(); ++k) {
+                          if (!far[k]) continue;
+                          const vec3 x = surface_points[k].position;
+                          const NearestPrimitive nearest = unsigned_distance(tview, x);
+                          if (!(nearest.distance < kInfinity)) {
+                            from_surface[k] = std::numeric_limits<double>::infinity();
+                            deviation[k] = -1;  // no output: no normal to compare
+                            continue;
+                          }
+                          const auto each_near = [&](auto&&, double reach, auto&& fn) {
+                            for_each_near(tview, x, float(reach), [&](uint32_t i) { fn(tview.triangle_ids[i]); });
+                          };
+                          measure(dvec3(x), dvec3(surface_points[k].normal), each_near,
+                                  double(nearest.distance) + 2 * tie, from_surface[k], deviation[k]);
+                          if (!(deviation[k] < std::numeric_limits<double>::infinity()))
+                            deviation[k] = angle_deg(dvec3(surface_points[k].normal),
+                                                     output_normal(mesh, nearest.primitive, nearest.u, nearest.v));
+                          if (!(from_surface[k] < std::numeric_limits<double>::infinity()))
+                            from_surface[k] = nearest.distance;
+                        }
+                      });
+  }
   uint64_t normals = 0;
   for (size_t k = 0; k < surface_points.size(); ++k) {
     result.mean_from_surface += from_surface[k];
@@ -676,9 +820,25 @@ Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const
   if (Status s = mesh_topology(mesh, out.topology, weld_equal_positions); !s.ok()) return s;
   out.seconds_topology = since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  if (Status s = count_self_intersections(mesh, out.self_intersections); !s.ok()) return s;
+  // One grid of the output's triangles for the pairs and the distances.
+  TriangleGrid grid;
+  if (Status s = guard_status("mesh_quality_report",
+                              [&] {
+                                build_triangle_grid(mesh, grid);
+                                return Status::Ok();
+                              });
+      !s.ok())
+    return s;
+  if (Status s = guard_status(
+          "count_self_intersections",
+          [&] { return count_self_intersections_unguarded(mesh, out.self_intersections, nullptr, &grid); });
+      !s.ok())
+    return s;
   out.seconds_self_intersections = since(t1);
-  if (Status s = surface_distances(model, mesh, options, out.distances); !s.ok()) return s;
+  if (Status s = guard_status("surface_distances",
+                              [&] { return surface_distances_unguarded(model, mesh, options, out.distances, &grid); });
+      !s.ok())
+    return s;
   out.seconds = since(t0);
   return Status::Ok();
 }
