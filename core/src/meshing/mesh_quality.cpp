@@ -1,7 +1,7 @@
 // The mesh quality report (gwnrt/meshing/mesh_quality.h): topology by sorted undirected edges and
 // union-find, self-intersections by a grid of cells over the triangles and the exact pair test
 // (exact_predicates.cpp), distances to S by the model's signed distance one way and the tracer's
-// hits and a BVH over the output the other.
+// hits and the same grid over the output the other.
 #include "gwnrt/meshing/mesh_quality.h"
 
 #include <algorithm>
@@ -626,9 +626,9 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   ray_points = {};
   result.surface_points = surface_points.size();
 
-  // S -> output: the output's triangles of non-zero area in the 27 cells of the grid around each
-  // point, and the wide ones near it by a tree over them. Where the nearest is not nearer than the
-  // cells' reach (a point far from the output), a tree over all of them.
+  // S -> output: the output's triangles of non-zero area in rings of the grid's cells around each
+  // point, and the wide ones near it by a tree over them. Where the nearest is not nearer than
+  // anything beyond the rings can be (a point far from the output), a tree over all of them.
   TriangleGrid own_grid;
   if (!shared_grid) build_triangle_grid(mesh, own_grid);
   const TriangleGrid& grid = shared_grid ? *shared_grid : own_grid;
@@ -679,7 +679,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   std::vector<double> from_surface(surface_points.size()), deviation(surface_points.size());
   std::vector<uint8_t> far(surface_points.size(), 0);  // beyond the rings searched: by a tree
   tbb::enumerable_thread_specific<std::vector<int64_t>> ring_runs;
-  // Rings of cells looked up directly where the grid has a dense map, else the 27 cells alone.
+  // Out to kMaxRings rings where the grid has a dense map, else 2 (each cell a search).
   const int64_t max_ring = grid.dense_run.empty() ? 2 : kMaxRings;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
