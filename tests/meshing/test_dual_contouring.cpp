@@ -65,7 +65,7 @@ TEST(MeshingCorners, LatticeJumpsAreEachLinesOwn) {
         along[k] = origin[axis] + sign * step * float(k);
       }
       int lattice_jumps[64][8];
-      mesh_jumps_along_axis_lattice(view, u, v, along, axis, sign, lattice_jumps);
+      jumps_along_axis_lattice(view.triangles, u, v, along, axis, sign, lattice_jumps);
       for (int line = 0; line < 64; ++line) {
         vec3 points[8];
         for (int k = 0; k < 8; ++k) {
@@ -119,6 +119,78 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
     EXPECT_GT(screened, 1000) << name << ": the screen was never used";
   }
 }
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// The corners' batched cone sums (ConeWindingBatch, with the jumps of M and of the cone from
+// their own lattice walks): within the screen's and the refinement's expected errors of the exact
+// w wherever the batch is sure, by blocks of corners beside the rims and across the meshes, and
+// at points on, within round-off of and just off cone triangles (where the walks and the solid
+// angle must agree on the side, or the batch must be unsure).
+TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj", "realworld/birdBath_ggg_photogrammetry.obj"}) {
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView view = model.view();
+    const BoundaryCurve& rim = model.boundary();
+    const float diagonal = glm::length(model.bounds().hi - model.bounds().lo);
+    test::Random random(31);
+    int sure = 0, unsure = 0;
+    float worst[2] = {0.0f, 0.0f};
+    // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
+    const auto batch_w = [&](const ConeWindingBatch<512>& batch, int j, const vec3& x, int axis, float sign) {
+      const float u[1] = {x[(axis + 1) % 3]}, v[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
+      int mesh_jumps[1][1], cone_jumps[1][1];
+      jumps_along_axis_lattice(view.triangles, u, v, along, axis, sign, mesh_jumps);
+      jumps_along_axis_lattice(view.cone, u, v, along, axis, sign, cone_jumps);
+      return batch.winding(j) + float(cone_jumps[0][0] - mesh_jumps[0][0]);
+    };
+    const auto check = [&](const std::vector<vec3>& points, int axis, float sign, const char* where) {
+      for (int pass = 0; pass < 2; ++pass) {
+        const float beta = pass == 0 ? kCornerScreenBeta : kCornerRefineBeta;
+        // Tenfold under the screen's margin of 0.02 and the refinement's of 2e-3 (dual_contouring.h).
+        const float tolerance = pass == 0 ? 2e-3f : 2e-4f;
+        ConeWindingBatch<512> batch;
+        for (const vec3& x : points) batch.add(x);
+        batch.evaluate(view.cone, beta, axis);
+        for (int j = 0; j < int(points.size()); ++j) {
+          const float w = batch_w(batch, j, points[j], axis, sign);
+          if (!(w == w)) {
+            ++unsure;
+            continue;
+          }
+          ++sure;
+          const float exact = winding_number_crossing<false, false>(view, points[j]).w;
+          worst[pass] = std::max(worst[pass], std::fabs(w - exact));
+          ASSERT_NEAR(w, exact, tolerance) << name << " " << where << " point " << j << " beta " << beta;
+        }
+      }
+    };
+    for (int block = 0; block < 12; ++block) {  // 8³ corners a cell of 1/256 of the box apart
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const float h = diagonal / 256.0f;
+      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1)) -
+                          random.uniform(0.0f, 8.0f * h) * vec3(1.0f);
+      std::vector<vec3> points;
+      for (int k = 0; k < 512; ++k) points.push_back(origin + h * vec3(float(k % 8), float(k / 8 % 8), float(k / 64)));
+      check(points, random.index(3), random.index(2) ? 1.0f : -1.0f, "block by the rim");
+    }
+    for (int cone_triangle = 0; cone_triangle < 40; ++cone_triangle) {
+      const uint32_t t = uint32_t(random.index(int(view.cone.triangle_count)));
+      const vec3 a = view.cone.vertices[3 * t], b = view.cone.vertices[3 * t + 1], c = view.cone.vertices[3 * t + 2];
+      const vec3 n = glm::normalize(glm::cross(b - a, c - a));
+      const float r0 = random.uniform(0, 1), r1 = random.uniform(0, 1 - r0);
+      const vec3 on = a + r0 * (b - a) + r1 * (c - a);
+      std::vector<vec3> points;
+      for (const float offset : {0.0f, 1e-7f, -1e-7f, 1e-5f, -1e-5f, 1e-3f, -1e-3f, 1e-2f})
+        points.push_back(on + offset * diagonal * n);
+      check(points, random.index(3), random.index(2) ? 1.0f : -1.0f, "by a cone triangle");
+    }
+    EXPECT_GT(sure, 10 * unsure) << name;
+    EXPECT_GT(worst[0], 0.0f) << name;
+    std::printf("%s: %d sure, %d unsure; largest error %.2e at the screen's beta, %.2e at the refinement's\n", name,
+                sure, unsure, worst[0], worst[1]);
+  }
+}
+#endif
 
 // The edges' smooth roots, searched with w at kRootSearchConeBeta (within 1e-4 of the exact): by
 // the double brute force each lies on S up to the bracket's width (kRootTolerance of the edge) or

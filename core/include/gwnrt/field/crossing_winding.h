@@ -262,6 +262,7 @@ template <>
 struct ConeCrossingVisitor<true, false> {
   using type = ConeCrossingGradientLanes;
 };
+
 #endif
 
 // w from the cone's traversal along a ray and the jumps of M met ahead on that ray.
@@ -278,6 +279,129 @@ GWNRT_HD GWNRT_FORCEINLINE vec3 cone_gradient(const Cone& cone) {
 }
 
 }  // namespace detail
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// w_C at many points at once (a block's corners in doubt, meshing/): one traversal of the cone's
+// tree for all of them, a cluster expanded where it is beyond beta radii of the points' whole box
+// (so of each point), each far cluster and near triangle evaluated at eight points at a time in
+// float. The cone's jumps are left to a walk of their own (jumps_along_axis_lattice), so a point
+// is unsure, and gets no value, wherever that walk and the solid angle might put it on different
+// sides of a near triangle or float is ill-conditioned: within kConeBatchPlaneTolerance of the
+// triangle's plane (relative to the distances involved, far above either's round-off), or near
+// the triangle itself (kNearConditioning, as the Taylor lanes). Elsewhere the float error is a
+// few ε / kNearConditioning a near triangle, far below the tree's own at the betas used.
+inline constexpr float kConeBatchPlaneTolerance = 1e-4f;
+
+template <int Capacity>
+struct ConeWindingBatch {
+  static constexpr int kChunks = (Capacity + 7) / 8;
+  f8 x[kChunks], y[kChunks], z[kChunks];
+  f8 omega[kChunks];
+  i8 unsure[kChunks];
+  int count = 0;
+
+  GWNRT_FORCEINLINE void add(const vec3& p) {
+    const int c = count / 8, l = count % 8;
+    if (l == 0) x[c] = y[c] = z[c] = omega[c] = f8{}, unsure[c] = i8{};
+    x[c][l] = p.x;
+    y[c][l] = p.y;
+    z[c][l] = p.z;
+    ++count;
+  }
+
+  // w_C at point i, or NaN where it is unsure.
+  GWNRT_FORCEINLINE float winding(int i) const {
+    return unsure[i / 8][i % 8] ? __builtin_nanf("") : omega[i / 8][i % 8] * float(0.25 * kInvPi);
+  }
+
+  void evaluate(const TriangleTreeView& cone, float beta, int axis) {
+    const int kx = (axis + 1) % 3, ky = (axis + 2) % 3;
+    if (count == 0) return;
+    const int chunks = (count + 7) / 8;
+    // The last chunk's unused lanes repeat its first point (finite; never read).
+    for (int l = count % 8; l != 0 && l < 8; ++l) {
+      x[chunks - 1][l] = x[chunks - 1][0];
+      y[chunks - 1][l] = y[chunks - 1][0];
+      z[chunks - 1][l] = z[chunks - 1][0];
+    }
+    vec3 lo(kInfinity), hi(-kInfinity);
+    for (int c = 0; c < chunks; ++c)
+      for (int l = 0; l < 8; ++l) {
+        lo = glm::min(lo, vec3(x[c][l], y[c][l], z[c][l]));
+        hi = glm::max(hi, vec3(x[c][l], y[c][l], z[c][l]));
+      }
+    const float diagonal = glm::length(hi - lo);
+    if (cone.bvh.node_count == 0) return;
+    const float inner_scale2 = beta * beta;
+    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
+    uint32_t stack[kTraversalStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const WideNode& node = cone.bvh.nodes[ni];
+      const WideNodeExpansion& ex = cone.expansion[ni];
+      for (int lane = 0; lane < kBvhWidth; ++lane) {
+        if (node.child[lane] == kEmptyLane) continue;
+        const vec3 centre(ex.centre[0][lane], ex.centre[1][lane], ex.centre[2][lane]);
+        const vec3 gap = glm::max(glm::max(lo - centre, centre - hi), vec3(0.0f));
+        const float scale2 = node.count[lane] == 0 ? inner_scale2 : leaf_scale2;
+        if (glm::dot(gap, gap) > scale2 * ex.radius[lane] * ex.radius[lane]) {
+          far(cone, ni, lane, centre, chunks);
+        } else if (node.count[lane] == 0) {
+          stack[sp++] = node.child[lane];
+        } else {
+          for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)
+            near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], diagonal, kx, ky, chunks);
+        }
+      }
+    }
+  }
+
+  GWNRT_FORCEINLINE void far(const TriangleTreeView& cone, uint32_t node, int lane, const vec3& centre, int chunks) {
+    const auto lanes = [&](auto field) { return splat<f8>(field(node)[lane]); };
+    const detail::FarLaneMoments<2, f8, decltype(lanes)> m(cone, lanes);
+    for (int c = 0; c < chunks; ++c)
+      omega[c] += FarFieldOmega<2, f8>(m.n, m.s, m.p, m.e, centre.x - x[c], centre.y - y[c], centre.z - z[c]).omega;
+  }
+
+  GWNRT_FORCEINLINE void near(const vec3& p0, const vec3& p1, const vec3& p2, float diagonal, int kx, int ky,
+                              int chunks) {
+    // The distance to the plane from (p0 − x)·n with n in double first: the solid angle's own
+    // numerator carries an error of a few ε |a||b||c|, far more than this across a sliver.
+    const vec3 n(glm::cross(dvec3(p1) - dvec3(p0), dvec3(p2) - dvec3(p0)));
+    const float longest = max_of(glm::length(p1 - p0), max_of(glm::length(p2 - p1), glm::length(p0 - p2)));
+    const float reach = kConeBatchPlaneTolerance * glm::length(n);
+    for (int c = 0; c < chunks; ++c) {
+      const f8 g[3][3] = {{p0.x - x[c], p0.y - y[c], p0.z - z[c]},
+                          {p1.x - x[c], p1.y - y[c], p1.z - z[c]},
+                          {p2.x - x[c], p2.y - y[c], p2.z - z[c]}};
+      const detail::LaneTangent<f8> t = detail::lane_solid_angle_tangent(g[0], g[1], g[2]);
+      f8 angle = 2.0f * lane_atan2(t.numerator, t.denominator);
+      // Where float is ill-conditioned, the triangle again in double (as the Taylor lanes do).
+      const uint32_t ill =
+          lane_bits(point_on_triangle(t.numerator, t.denominator, t.length_product, kNearConditioning));
+      for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
+        const int l = lowest_set_bit(rest);
+        double length_product;
+        const SolidAngleTangent<double> exact = triangle_solid_angle_tangent(
+            dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x[c][l], y[c][l], z[c][l]), length_product);
+        unsure[c][l] |=
+            point_on_triangle(exact.numerator, exact.denominator, length_product, kOnTriangleRoundOff) ? -1 : 0;
+        angle[l] = float(2.0 * atan2(exact.numerator, exact.denominator));
+      }
+      omega[c] += angle;
+      // Whether the line along the axis through x might cross the triangle near x: the corners'
+      // distances from x are at most the longer of |b|, |c| plus the longest edge. (A sign of a
+      // difference of floats is exact, so the test beside the line is.)
+      const f8 farthest = lane_select(t.lb > t.lc, t.lb, t.lc) + (longest + diagonal);
+      const f8 height = g[0][0] * n.x + g[0][1] * n.y + g[0][2] * n.z;
+      const i8 beside = detail::beside_axis_line(g[0][kx], g[1][kx], g[2][kx], g[0][ky], g[1][ky], g[2][ky]);
+      unsure[c] |= (height <= reach * farthest) & (-height <= reach * farthest) & ~beside;
+    }
+  }
+};
+#endif
 
 // w, and ∇w and H_w when asked, by crossings and the cone. Exact up to float round-off (the
 // cone's expansion is held to 1e-5 by kConeBeta) wherever x is not within round-off of M; on M
@@ -392,15 +516,16 @@ GWNRT_HD void mesh_jumps_along_axis(const ModelView& m, const vec3 (&points)[Cou
   });
 }
 
-// The same for the N × N lines of a lattice at once (a block's columns): line i + N·j runs
-// through the points at u[i] along axis (axis + 1) % 3, v[j] along (axis + 2) % 3 and along[k]
-// along `axis` (ascending along sign · e_axis; the lines share them, as a grid's corners do).
-// Each line's jumps are exactly mesh_jumps_along_axis's for its points: its crossings are tested
-// by its own frame, in every leaf its walk would open, but M is walked once for the lattice.
+// The same for the N × N lines of a lattice at once (a block's columns), for the triangles of
+// `tree` (M's, or the cone's): line i + N·j runs through the points at u[i] along axis
+// (axis + 1) % 3, v[j] along (axis + 2) % 3 and along[k] along `axis` (ascending along
+// sign · e_axis; the lines share them, as a grid's corners do). Each line's jumps are exactly
+// mesh_jumps_along_axis's for its points: its crossings are tested by its own frame, in every
+// leaf its walk would open, but the tree is walked once for the lattice.
 template <int N, int Count>
-GWNRT_HD void mesh_jumps_along_axis_lattice(const ModelView& m, const float (&u)[N], const float (&v)[N],
-                                            const float (&along)[Count], int axis, float sign,
-                                            int (&mesh_jumps)[N * N][Count]) {
+GWNRT_HD void jumps_along_axis_lattice(const TriangleTreeView& tree, const float (&u)[N], const float (&v)[N],
+                                       const float (&along)[Count], int axis, float sign,
+                                       int (&mesh_jumps)[N * N][Count]) {
   const int au = (axis + 1) % 3, av = (axis + 2) % 3;
   vec3 direction(0.0f), lo, hi;
   direction[axis] = sign;
@@ -415,8 +540,8 @@ GWNRT_HD void mesh_jumps_along_axis_lattice(const ModelView& m, const float (&u)
   for (int k = 0; k < Count; ++k) offset[k] = (along[k] - along[0]) * sign;
   for (int c = 0; c < N * N; ++c)
     for (int k = 0; k < Count; ++k) mesh_jumps[c][k] = 0;
-  const vec3* vertices = m.triangles.vertices;
-  visit_axis_beam_leaves(m.triangles.bvh, beam, lo, hi, [&](uint32_t first, uint32_t count) {
+  const vec3* vertices = tree.vertices;
+  visit_axis_beam_leaves(tree.bvh, beam, lo, hi, [&](uint32_t first, uint32_t count) {
     for (uint32_t t = first; t < first + count; ++t) {
       const vec3 &p0 = vertices[3 * t], &p1 = vertices[3 * t + 1], &p2 = vertices[3 * t + 2];
       // A line whose origin lies outside the triangle's range along u or v misses it (ray.h).

@@ -70,13 +70,25 @@ inline constexpr float kCornerScreenMargin = 2e-2f;
 inline constexpr float kCornerRefineBeta = kRootSearchConeBeta;
 inline constexpr float kCornerRefineMargin = 2e-3f;
 
+// w at a corner from M's jumps ahead of it, given its refined value: exact near the level.
+GWNRT_HD inline float exact_corner_winding(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
+                                           float level, float refined) {
+  return fabsf(refined - level) < kCornerRefineMargin ? winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps) : refined;
+}
+
+// The same given its screened value: refined near the level, then exact nearer.
+GWNRT_HD inline float refined_corner_winding(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
+                                             float level, float screened) {
+  if (!(fabsf(screened - level) < kCornerScreenMargin)) return screened;
+  return exact_corner_winding(m, x, axis, sign, mesh_jumps, level,
+                              winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerRefineBeta));
+}
+
 // w at a corner from M's jumps ahead of it: screened, refined, then exact near the level.
 GWNRT_HD inline float corner_winding_value(const ModelView& m, const vec3& x, int axis, float sign, int mesh_jumps,
                                            float level) {
-  const float screened = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerScreenBeta);
-  if (!(fabsf(screened - level) < kCornerScreenMargin)) return screened;
-  const float refined = winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerRefineBeta);
-  return fabsf(refined - level) < kCornerRefineMargin ? winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps) : refined;
+  return refined_corner_winding(m, x, axis, sign, mesh_jumps, level,
+                                winding_from_mesh_jumps(m, x, axis, sign, mesh_jumps, kCornerScreenBeta));
 }
 
 // The axis ray a block's corners take: the one by which its centre (corner 4, 4, 4 of the block)
@@ -242,9 +254,44 @@ GWNRT_HD inline GridCoord column_corner(uint32_t column, int k, int axis, float 
   return axis == 0 ? GridCoord{ck, cu, cv} : (axis == 1 ? GridCoord{cv, ck, cu} : GridCoord{cu, cv, ck});
 }
 
+// The column of corner `local` along the slot's ray and its place k in it (column_corner's
+// inverse).
+GWNRT_HD inline uint32_t corner_column(const GridCoord& local, int axis, float sign, int& k) {
+  k = sign > 0.0f ? local[axis] : kBlockCells - 1 - local[axis];
+  return uint32_t(local[(axis + 1) % 3] + kBlockCells * local[(axis + 2) % 3]);
+}
+
+// The jumps of `tree`'s triangles ahead of each corner of block b along (axis, sign), for all its
+// columns in one walk: jumps[column][k] for the corner column_corner(column, k, axis, sign).
+GWNRT_HD inline void block_jumps(const TriangleTreeView& tree, const MeshGrid& grid, const GridCoord& b, int axis,
+                                 float sign, int (&jumps)[kBlockCells * kBlockCells][kBlockCells]) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  float cu[kBlockCells], cv[kBlockCells], along[kBlockCells];
+  for (int k = 0; k < kBlockCells; ++k) {
+    // Corner (k, k, k): a corner's coordinate along an axis depends on its index along it alone.
+    const vec3 diagonal = grid.corner_position({b.x * kBlockCells + k, b.y * kBlockCells + k, b.z * kBlockCells + k});
+    cu[k] = diagonal[u];
+    cv[k] = diagonal[v];
+    along[sign > 0.0f ? k : kBlockCells - 1 - k] = diagonal[axis];
+  }
+  jumps_along_axis_lattice(tree, cu, cv, along, axis, sign, jumps);
+}
+
+// A corner whose cone sum CornerColumnPass left to CornerBatchPass: M's jumps ahead of it in the
+// payload of a negative quiet NaN (nonzero: the default NaN of arithmetic is 0xffc00000).
+inline constexpr int32_t kDeferredJumpsLimit = 1 << 21;
+GWNRT_HD inline float deferred_corner(int mesh_jumps) {
+  return bits_float(0xffc00000u | uint32_t(mesh_jumps + kDeferredJumpsLimit));
+}
+GWNRT_HD inline bool is_deferred_corner(float f, int& mesh_jumps) {
+  const uint32_t bits = float_bits(f);
+  mesh_jumps = int32_t(bits & 0x3fffffu) - kDeferredJumpsLimit;
+  return (bits & 0xffc00000u) == 0xffc00000u && (bits & 0x3fffffu) != 0;
+}
+
 // Per slot, with the exact method: M's jumps ahead of each corner along the slot's ray, for all
-// its columns in one walk (mesh_jumps_along_axis_lattice), stored in the corner's value by its
-// bits until CornerColumnPass reads them and writes the value over them.
+// its columns in one walk (block_jumps), stored in the corner's value by its bits until
+// CornerColumnPass reads them and writes the value over them.
 struct CornerJumpsPass {
   SparseGridView view;
   ModelView model;
@@ -256,18 +303,8 @@ struct CornerJumpsPass {
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
     if (!ray.exact) return;
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
-    const int u = (ray.axis + 1) % 3, v = (ray.axis + 2) % 3;
-    float cu[kBlockCells], cv[kBlockCells], along[kBlockCells];
-    for (int k = 0; k < kBlockCells; ++k) {
-      // Corner (k, k, k): a corner's coordinate along an axis depends on its index along it alone.
-      const vec3 diagonal =
-          view.grid.corner_position({b.x * kBlockCells + k, b.y * kBlockCells + k, b.z * kBlockCells + k});
-      cu[k] = diagonal[u];
-      cv[k] = diagonal[v];
-      along[ray.sign > 0.0f ? k : kBlockCells - 1 - k] = diagonal[ray.axis];
-    }
     int jumps[kBlockCells * kBlockCells][kBlockCells];
-    mesh_jumps_along_axis_lattice(model, cu, cv, along, ray.axis, ray.sign, jumps);
+    block_jumps(model.triangles, view.grid, b, ray.axis, ray.sign, jumps);
     float* out = corner_value + slot * kBlockItems;
     for (uint32_t column = 0; column < kBlockCells * kBlockCells; ++column)
       for (int k = 0; k < kBlockCells; ++k)
@@ -279,7 +316,8 @@ struct CornerJumpsPass {
 // elsewhere. With the exact method M's crossings ahead of each corner are CornerJumpsPass's,
 // along the block's ray (corner_ray): fewer crossings and nodes on the way than a fixed +z.
 // Where the block's bound (BlockWindingPass) settles a corner's sign, its value is that
-// estimate (the sign exact, the size within the bound); else the cone is summed.
+// estimate (the sign exact, the size within the bound); else the cone is summed, or with
+// defer_cone_sums left to CornerBatchPass (deferred_corner).
 struct CornerColumnPass {
   SparseGridView view;
   ModelView model;
@@ -287,6 +325,7 @@ struct CornerColumnPass {
   float level;
   const BlockWinding* block_winding;  // per slot, or nullptr
   float* corner_value;
+  bool defer_cone_sums = false;
 
   GWNRT_HD void operator()(uint64_t item) const {
     const uint32_t slot = uint32_t(item / (kBlockCells * kBlockCells));
@@ -324,7 +363,12 @@ struct CornerColumnPass {
             f = -float(jumps[k]) - level;
           } else {
             if (bound) f = BlockWindingPass::estimate(view.grid, b, *bound, local[k], points[k], jumps[k], level);
-            if (!(f == f)) f = corner_winding_value(model, points[k], axis, sign, jumps[k], level) - level;
+            if (!(f == f)) {
+              if (defer_cone_sums && jumps[k] > -kDeferredJumpsLimit && jumps[k] < kDeferredJumpsLimit)
+                f = deferred_corner(jumps[k]);
+              else
+                f = corner_winding_value(model, points[k], axis, sign, jumps[k], level) - level;
+            }
           }
         }
         out[local_index(local[k])] = f;
@@ -335,6 +379,110 @@ struct CornerColumnPass {
       out[local_index(local[k])] =
           needed[k] ? evaluate_winding(model, position(local[k]), winding).w - level : __builtin_nanf("");
   }
+};
+
+// Whether CornerColumnPass leaves its cone sums to CornerBatchPass: where the host's lanes batch
+// them (docs/performance.md: the scan's corners); the device sums a corner per thread.
+#if GWNRT_HOST_LANES && defined(__AVX__)
+inline constexpr bool kBatchedCornerSums = true;
+#else
+inline constexpr bool kBatchedCornerSums = false;
+#endif
+
+// Below this many corners in doubt a slot sums them one by one: the batch's traversal of the
+// cone for the points' box costs about a few single sums.
+inline constexpr int kMinCornerBatch = 4;
+
+// Per slot, after CornerColumnPass with defer_cone_sums: the corners it left (deferred_corner)
+// screened together, the cone's jumps ahead of them from one walk of its tree along the slot's
+// lattice and w_C from one traversal for all of them (ConeWindingBatch, at kCornerScreenBeta);
+// each then refined as corner_winding_value does. A corner the batch is unsure of, or a slot
+// with few, takes corner_winding_value.
+struct CornerBatchPass {
+  SparseGridView view;
+  ModelView model;
+  WindingOptions winding;
+  float level;
+  const BlockWinding* block_winding;  // per slot, or nullptr
+  float* corner_value;
+
+  GWNRT_HD void operator()(uint64_t slot) const {
+    float* out = corner_value + slot * kBlockItems;
+    uint16_t deferred[kBlockItems];
+    int count = 0, mesh_jumps;
+    for (uint32_t i = 0; i < kBlockItems; ++i)
+      if (is_deferred_corner(out[i], mesh_jumps)) deferred[count++] = uint16_t(i);
+    if (count == 0) return;
+    const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    if (count >= kMinCornerBatch) {
+      batch_sums(b, ray, deferred, count, out);
+      return;
+    }
+#endif
+    for (int j = 0; j < count; ++j) {
+      const uint32_t i = deferred[j];
+      is_deferred_corner(out[i], mesh_jumps);
+      out[i] = corner_winding_value(model, position(b, i), ray.axis, ray.sign, mesh_jumps, level) - level;
+    }
+  }
+
+  GWNRT_HD vec3 position(const GridCoord& b, uint32_t i) const {
+    const GridCoord l = local_coord(i);
+    return view.grid.corner_position({b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z});
+  }
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  // The deferred corners [deferred, deferred + count) of block b screened as one batch, those
+  // within kCornerScreenMargin of the level refined as another, each finished one by one.
+  void batch_sums(const GridCoord& b, const CornerRay& ray, const uint16_t* deferred, int count, float* out) const {
+    int cone_jumps[kBlockCells * kBlockCells][kBlockCells];
+    block_jumps(model.cone, view.grid, b, ray.axis, ray.sign, cone_jumps);
+    // w at deferred corner i from the batch's w_C (its j-th point), NaN where the batch is
+    // unsure; M's jumps ahead of it in `jumps`.
+    const auto batch_winding = [&](const ConeWindingBatch<kBlockItems>& batch, int j, uint32_t i, int& jumps) {
+      is_deferred_corner(out[i], jumps);
+      int k;
+      const uint32_t column = corner_column(local_coord(i), ray.axis, ray.sign, k);
+      return batch.winding(j) + float(cone_jumps[column][k] - jumps);
+    };
+    ConeWindingBatch<kBlockItems> batch;
+    for (int j = 0; j < count; ++j) batch.add(position(b, deferred[j]));
+    batch.evaluate(model.cone, kCornerScreenBeta, ray.axis);
+    uint16_t near_level[kBlockItems];
+    float near_value[kBlockItems];
+    int near_count = 0, jumps;
+    for (int j = 0; j < count; ++j) {
+      const uint32_t i = deferred[j];
+      const float screened = batch_winding(batch, j, i, jumps);
+      if (!(screened == screened)) {
+        out[i] = corner_winding_value(model, position(b, i), ray.axis, ray.sign, jumps, level) - level;
+      } else if (fabsf(screened - level) < kCornerScreenMargin) {
+        near_value[near_count] = screened;
+        near_level[near_count++] = uint16_t(i);
+      } else {
+        out[i] = screened - level;
+      }
+    }
+    const bool refine_in_batch = near_count >= kMinCornerBatch;
+    if (refine_in_batch) {
+      batch.count = 0;
+      for (int j = 0; j < near_count; ++j) batch.add(position(b, near_level[j]));
+      batch.evaluate(model.cone, kCornerRefineBeta, ray.axis);
+    }
+    for (int j = 0; j < near_count; ++j) {
+      const uint32_t i = near_level[j];
+      const vec3 x = position(b, i);
+      const float refined = refine_in_batch ? batch_winding(batch, j, i, jumps) : __builtin_nanf("");
+      is_deferred_corner(out[i], jumps);
+      out[i] =
+          (refined == refined ? exact_corner_winding(model, x, ray.axis, ray.sign, jumps, level, refined)
+                              : refined_corner_winding(model, x, ray.axis, ray.sign, jumps, level, near_value[j])) -
+          level;
+    }
+  }
+#endif
 };
 
 GWNRT_HD inline bool is_inside(float f) { return f > 0.0f; }

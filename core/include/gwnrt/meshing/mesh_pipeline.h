@@ -289,9 +289,10 @@ template <class Backend>
 void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOptions& options,
                       SparseGridArrays<Backend>& g) {
   g.corner_value.resize(g.slots * kBlockItems);
+  const bool cone_sums = model.cone.triangle_count > 0 &&
+                         resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
   const BlockWinding* block_winding = nullptr;
-  if (options.settle_corners_by_bounds && model.cone.triangle_count > 0 &&
-      resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing) {
+  if (options.settle_corners_by_bounds && cone_sums) {
     g.block_winding.resize(g.slots);
     backend.parallel_for(g.slots, BlockWindingPass{g.view, model, options.level, g.block_winding.data()});
     block_winding = g.block_winding.data();
@@ -301,9 +302,16 @@ void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOpt
                          16);
   const uint64_t columns = g.slots * kBlockCells * kBlockCells;
   if (options.progress_total) options.progress_total->fetch_add(columns);
+  const bool batched = kBatchedCornerSums && cone_sums;
   backend.parallel_for(
-      columns, CornerColumnPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data()}, 4,
+      columns,
+      CornerColumnPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data(), batched}, 4,
       options.progress);
+  if constexpr (kBatchedCornerSums)
+    if (batched)
+      backend.parallel_for(
+          g.slots, CornerBatchPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data()},
+          1);
   g.view.corner_value = g.corner_value.data();
 }
 
