@@ -121,11 +121,11 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
 }
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
-// The corners' batched cone sums (ConeWindingBatch, with the jumps of M and of the cone from
-// their own lattice walks): within the screen's and the refinement's expected errors of the exact
-// w wherever the batch is sure, by blocks of corners beside the rims and across the meshes, and
-// at points on, within round-off of and just off cone triangles (where the walks and the solid
-// angle must agree on the side, or the batch must be unsure).
+// The batched cone sums (ConeWindingBatch, with the jumps of M and of the cone from their own
+// lattice walks): w within the screen's and the refinement's expected errors of the exact w
+// wherever the batch is sure, by blocks of corners beside the rims and across the meshes, and at
+// points on, within round-off of and just off cone triangles (where the walks and the solid angle
+// must agree on the side, or the batch must be unsure); ∇w by the rims as the normals take it.
 TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
   for (const char* name : {"bunny_holes.obj", "teapot.obj", "realworld/birdBath_ggg_photogrammetry.obj"}) {
     const GwnModel model = test::build_model(test::load_test_mesh(name));
@@ -134,25 +134,32 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     const float diagonal = glm::length(model.bounds().hi - model.bounds().lo);
     test::Random random(31);
     int sure = 0, unsure = 0;
-    float worst[2] = {0.0f, 0.0f};
     // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
-    const auto batch_w = [&](const ConeWindingBatch<512>& batch, int j, const vec3& x, int axis, float sign) {
+    // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
+    const auto batch_w = [&](float w_cone, const vec3& x, int axis, float sign) {
       const float u[1] = {x[(axis + 1) % 3]}, v[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
       int mesh_jumps[1][1], cone_jumps[1][1];
       jumps_along_axis_lattice(view.triangles, u, v, along, axis, sign, mesh_jumps);
       jumps_along_axis_lattice(view.cone, u, v, along, axis, sign, cone_jumps);
-      return batch.winding(j) + float(cone_jumps[0][0] - mesh_jumps[0][0]);
+      return w_cone + float(cone_jumps[0][0] - mesh_jumps[0][0]);
     };
+    // The screen's, the refinement's and the centres' betas (the last with ∇w, as the centres
+    // take it), each tenfold under what its use allows: the margins of 0.02 and 2e-3 on the
+    // corners (dual_contouring.h) and of 1e-3 on ŵ (kBoxWindingMargin).
+    const float betas[3] = {kCornerScreenBeta, kCornerRefineBeta, kTaylorPointBeta};
+    const float tolerances[3] = {2e-3f, 2e-4f, 1e-4f};
+    float worst[3] = {0.0f, 0.0f, 0.0f};
     const auto check = [&](const std::vector<vec3>& points, int axis, float sign, const char* where) {
-      for (int pass = 0; pass < 2; ++pass) {
-        const float beta = pass == 0 ? kCornerScreenBeta : kCornerRefineBeta;
-        // Tenfold under the screen's margin of 0.02 and the refinement's of 2e-3 (dual_contouring.h).
-        const float tolerance = pass == 0 ? 2e-3f : 2e-4f;
+      for (int pass = 0; pass < 3; ++pass) {
         ConeWindingBatch<512> batch;
-        for (const vec3& x : points) batch.add(x);
-        batch.evaluate(view.cone, beta, axis);
+        ConeWindingBatch<512, true> with_gradient;
+        for (const vec3& x : points) (pass < 2 ? batch.add(x) : with_gradient.add(x));
+        if (pass < 2)
+          batch.evaluate(view.cone, betas[pass], axis);
+        else
+          with_gradient.evaluate(view.cone, betas[pass], axis);
         for (int j = 0; j < int(points.size()); ++j) {
-          const float w = batch_w(batch, j, points[j], axis, sign);
+          const float w = batch_w(pass < 2 ? batch.winding(j) : with_gradient.winding(j), points[j], axis, sign);
           if (!(w == w)) {
             ++unsure;
             continue;
@@ -160,7 +167,7 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
           ++sure;
           const float exact = winding_number_crossing<false, false>(view, points[j]).w;
           worst[pass] = std::max(worst[pass], std::fabs(w - exact));
-          ASSERT_NEAR(w, exact, tolerance) << name << " " << where << " point " << j << " beta " << beta;
+          ASSERT_NEAR(w, exact, tolerances[pass]) << name << " " << where << " point " << j << " beta " << betas[pass];
         }
       }
     };
@@ -184,10 +191,37 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
         points.push_back(on + offset * diagonal * n);
       check(points, random.index(3), random.index(2) ? 1.0f : -1.0f, "by a cone triangle");
     }
+    // ∇w_C (the smooth roots' normals): within a relative 1e-2 of ∇w at the derivatives' beta,
+    // as the one-by-one gradient at the same beta is.
+    float worst_gradient[2] = {0.0f, 0.0f};
+    for (int block = 0; block < 12; ++block) {
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const float h = diagonal / 256.0f;
+      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
+      ConeWindingBatch<512, true> batch;
+      std::vector<vec3> points;
+      for (int k = 0; k < 300; ++k) {
+        points.push_back(origin + random.uniform(0.5f * h, 8.0f * h) * random.unit());
+        batch.add(points.back());
+      }
+      batch.evaluate(view.cone, kHermiteNormalBeta, -1);
+      for (int j = 0; j < int(points.size()); ++j) {
+        const vec3 reference = winding_number_crossing<true, false>(view, points[j], kConeDerivativeBeta).gradient;
+        const vec3 alone = smooth_root_gradient(view, WindingOptions{}, points[j]);
+        const vec3 g = batch.winding_gradient(j);
+        if (!(g.x == g.x)) continue;
+        const float scale = glm::length(reference);
+        worst_gradient[0] = std::max(worst_gradient[0], glm::length(g - reference) / scale);
+        worst_gradient[1] = std::max(worst_gradient[1], glm::length(alone - reference) / scale);
+      }
+    }
+    std::printf("%s: gradient's largest relative error %.2e batched, %.2e one by one\n", name, worst_gradient[0],
+                worst_gradient[1]);
+    EXPECT_LT(worst_gradient[0], 1e-2f) << name;
     EXPECT_GT(sure, 10 * unsure) << name;
     EXPECT_GT(worst[0], 0.0f) << name;
-    std::printf("%s: %d sure, %d unsure; largest error %.2e at the screen's beta, %.2e at the refinement's\n", name,
-                sure, unsure, worst[0], worst[1]);
+    std::printf("%s: %d sure, %d unsure; largest error %.2e, %.2e, %.2e at betas 2, 3, 5\n", name, sure, unsure,
+                worst[0], worst[1], worst[2]);
   }
 }
 #endif

@@ -291,18 +291,27 @@ GWNRT_HD GWNRT_FORCEINLINE vec3 cone_gradient(const Cone& cone) {
 // the triangle itself (kNearConditioning, as the Taylor lanes). Elsewhere the float error is a
 // few ε / kNearConditioning a near triangle, far below the tree's own at the betas used.
 inline constexpr float kConeBatchPlaneTolerance = 1e-4f;
+// With ∇w_C (the Biot–Savart field of the near triangles' edges, no jumps needed), an edge whose
+// |g_i × g_j| is below this share of |g_i||g_j| (x near its line, where float loses the terms that
+// cancel between the triangles sharing it) has its triangle taken in double.
+inline constexpr float kBatchGradientConditioning = 1e-2f;
 
-template <int Capacity>
+template <int Capacity, bool WantGradient = false>
 struct ConeWindingBatch {
   static constexpr int kChunks = (Capacity + 7) / 8;
   f8 x[kChunks], y[kChunks], z[kChunks];
   f8 omega[kChunks];
   i8 unsure[kChunks];
+  f8 gradient[WantGradient ? 3 : 1][kChunks];
   int count = 0;
 
   GWNRT_FORCEINLINE void add(const vec3& p) {
     const int c = count / 8, l = count % 8;
-    if (l == 0) x[c] = y[c] = z[c] = omega[c] = f8{}, unsure[c] = i8{};
+    if (l == 0) {
+      x[c] = y[c] = z[c] = omega[c] = f8{};
+      unsure[c] = i8{};
+      if constexpr (WantGradient) gradient[0][c] = gradient[1][c] = gradient[2][c] = f8{};
+    }
     x[c][l] = p.x;
     y[c][l] = p.y;
     z[c][l] = p.z;
@@ -314,8 +323,16 @@ struct ConeWindingBatch {
     return unsure[i / 8][i % 8] ? __builtin_nanf("") : omega[i / 8][i % 8] * float(0.25 * kInvPi);
   }
 
+  // ∇w_C at point i (WantGradient), or NaN where it is unsure.
+  GWNRT_FORCEINLINE vec3 winding_gradient(int i) const requires WantGradient {
+    if (unsure[i / 8][i % 8]) return vec3(__builtin_nanf(""));
+    return vec3(gradient[0][i / 8][i % 8], gradient[1][i / 8][i % 8], gradient[2][i / 8][i % 8]) * float(0.25 * kInvPi);
+  }
+
+  // axis: that of the rays along which the caller counts the cone's jumps, or -1 where it needs
+  // none (∇w alone: no point is then unsure for its side of a triangle).
   void evaluate(const TriangleTreeView& cone, float beta, int axis) {
-    const int kx = (axis + 1) % 3, ky = (axis + 2) % 3;
+    const int kx = axis < 0 ? -1 : (axis + 1) % 3, ky = (axis + 2) % 3;
     if (count == 0) return;
     const int chunks = (count + 7) / 8;
     // The last chunk's unused lanes repeat its first point (finite; never read).
@@ -361,8 +378,32 @@ struct ConeWindingBatch {
   GWNRT_FORCEINLINE void far(const TriangleTreeView& cone, uint32_t node, int lane, const vec3& centre, int chunks) {
     const auto lanes = [&](auto field) { return splat<f8>(field(node)[lane]); };
     const detail::FarLaneMoments<2, f8, decltype(lanes)> m(cone, lanes);
-    for (int c = 0; c < chunks; ++c)
-      omega[c] += FarFieldOmega<2, f8>(m.n, m.s, m.p, m.e, centre.x - x[c], centre.y - y[c], centre.z - z[c]).omega;
+    for (int c = 0; c < chunks; ++c) {
+      if constexpr (WantGradient) {
+        const FarFieldTerms<2, f8> t(m.n, m.s, m.p, m.e, centre.x - x[c], centre.y - y[c], centre.z - z[c]);
+        omega[c] += t.omega;
+        f8 g[3];
+        far_field_gradient(t, m.n, m.e, g);
+        for (int k = 0; k < 3; ++k) gradient[k][c] -= g[k];  // ∇ₓ = -∇_d
+      } else {
+        omega[c] += FarFieldOmega<2, f8>(m.n, m.s, m.p, m.e, centre.x - x[c], centre.y - y[c], centre.z - z[c]).omega;
+      }
+    }
+  }
+
+  // One edge's Biot–Savart term of ∇Ω (solid_angle.h's EdgeField) at eight points, added to sum;
+  // the lanes where it is ill-conditioned (kBatchGradientConditioning) returned.
+  static GWNRT_FORCEINLINE i8 add_edge_field(const f8 (&gi)[3], const f8 (&gj)[3], f8 li, f8 lj, f8 (&sum)[3]) {
+    const f8 c[3] = {gi[1] * gj[2] - gi[2] * gj[1], gi[2] * gj[0] - gi[0] * gj[2], gi[0] * gj[1] - gi[1] * gj[0]};
+    const f8 c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    const f8 scale = kBatchGradientConditioning * li * lj;
+    const i8 ill = c2 <= scale * scale;
+    const f8 inv_li = 1.0f / li, inv_lj = 1.0f / lj;
+    f8 f{};
+    for (int k = 0; k < 3; ++k) f += (gj[k] - gi[k]) * (gj[k] * inv_lj - gi[k] * inv_li);
+    const f8 s = lane_select(ill, f8{}, f / c2);
+    for (int k = 0; k < 3; ++k) sum[k] += c[k] * s;
+    return ill;
   }
 
   GWNRT_FORCEINLINE void near(const vec3& p0, const vec3& p1, const vec3& p2, float diagonal, int kx, int ky,
@@ -379,8 +420,16 @@ struct ConeWindingBatch {
       const detail::LaneTangent<f8> t = detail::lane_solid_angle_tangent(g[0], g[1], g[2]);
       f8 angle = 2.0f * lane_atan2(t.numerator, t.denominator);
       // Where float is ill-conditioned, the triangle again in double (as the Taylor lanes do).
-      const uint32_t ill =
-          lane_bits(point_on_triangle(t.numerator, t.denominator, t.length_product, kNearConditioning));
+      i8 ill_lanes = point_on_triangle(t.numerator, t.denominator, t.length_product, kNearConditioning);
+      f8 edge_sum[3] = {};
+      if constexpr (WantGradient) {
+        const f8 la = lane_sqrt(g[0][0] * g[0][0] + g[0][1] * g[0][1] + g[0][2] * g[0][2]);
+        ill_lanes |= add_edge_field(g[0], g[1], la, t.lb, edge_sum);
+        ill_lanes |= add_edge_field(g[1], g[2], t.lb, t.lc, edge_sum);
+        ill_lanes |= add_edge_field(g[2], g[0], t.lc, la, edge_sum);
+        for (int k = 0; k < 3; ++k) gradient[k][c] += lane_select(ill_lanes, f8{}, edge_sum[k]);
+      }
+      const uint32_t ill = lane_bits(ill_lanes);
       for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
         const int l = lowest_set_bit(rest);
         double length_product;
@@ -389,8 +438,14 @@ struct ConeWindingBatch {
         unsure[c][l] |=
             point_on_triangle(exact.numerator, exact.denominator, length_product, kOnTriangleRoundOff) ? -1 : 0;
         angle[l] = float(2.0 * atan2(exact.numerator, exact.denominator));
+        if constexpr (WantGradient) {
+          const vec3 exact_gradient = detail::saturated_float(
+              triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x[c][l], y[c][l], z[c][l])));
+          for (int k = 0; k < 3; ++k) gradient[k][c][l] += exact_gradient[k];
+        }
       }
       omega[c] += angle;
+      if (kx < 0) continue;
       // Whether the line along the axis through x might cross the triangle near x: the corners'
       // distances from x are at most the longer of |b|, |c| plus the longest edge. (A sign of a
       // difference of floats is exact, so the test beside the line is.)

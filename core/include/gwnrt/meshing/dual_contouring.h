@@ -105,6 +105,19 @@ GWNRT_HD inline BlockRay block_ray(const MeshGrid& grid, const Aabb& bounds, con
   return {exit.kz, exit.sz > 0.0f ? 1.0f : -1.0f};
 }
 
+// Whether the cone sums of a slot's corners in doubt and of its smooth roots' normals go as
+// batches (CornerBatchPass, NormalBatchPass): where the host's lanes batch them
+// (docs/performance.md: the scan's corners); the device sums a point per thread.
+#if GWNRT_HOST_LANES && defined(__AVX__)
+inline constexpr bool kBatchedConeSums = true;
+#else
+inline constexpr bool kBatchedConeSums = false;
+#endif
+
+// Below this many corners in doubt a slot sums them one by one: the batch's traversal of the
+// cone for the points' box costs about a few single sums.
+inline constexpr int kMinConeBatch = 4;
+
 // Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
 // first-order centres at two scales: the block (8³ corners) and its eighths (4³: their own,
 // tighter bounds) where the block's estimate may leave some of their corners unsettled or the
@@ -172,15 +185,61 @@ struct BlockWindingPass {
       w.block = taylor_point(model, centre, w.axis, w.sign, w.point[0]);
       if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return;
     }
+    uint32_t wanted = 0;  // the eighths whose centres are to be computed
     for (int i = 0; i < 8; ++i) {
-      const GridCoord first{4 * (i & 1), 4 * ((i >> 1) & 1), 4 * (i >> 2)};
-      const Aabb mid = corner_box(view.grid, b, first, 4);
+      const Aabb mid = eighth_box(b, i);
       if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level)) continue;
-      BoxFieldBounds& bounds = w.bounds[1 + i];
-      bounds = box_field_bounds(model, mid, w.axis, w.sign);
-      if (bounds.usable && taylor_point(model, mid.centre(), w.axis, w.sign, w.point[1 + i])) w.mid |= 1u << i;
+      w.bounds[1 + i] = box_field_bounds(model, mid, w.axis, w.sign);
+      if (w.bounds[1 + i].usable) wanted |= 1u << i;
+    }
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    if (__builtin_popcount(wanted) >= kMinConeBatch) {
+      batch_centres(b, wanted, w);
+      return;
+    }
+#endif
+    for (; wanted != 0; wanted &= wanted - 1) {
+      const int i = lowest_set_bit(wanted);
+      if (taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, w.point[1 + i])) w.mid |= 1u << i;
     }
   }
+
+  // The box of eighth i (index x + 2y + 4z) of block b's corners.
+  GWNRT_HD Aabb eighth_box(const GridCoord& b, int i) const {
+    return corner_box(view.grid, b, {4 * (i & 1), 4 * ((i >> 1) & 1), 4 * (i >> 2)}, 4);
+  }
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  // The centres of the eighths in `wanted` from one batched traversal of the cone (ŵ = w_C plus
+  // the cone's jumps ahead along the block's ray, from a walk of the eighths' 2 × 2 lattice of
+  // lines; ∇w = ∇w_C), as taylor_point gives them; one the batch is unsure of takes taylor_point.
+  void batch_centres(const GridCoord& b, uint32_t wanted, BlockWinding& w) const {
+    const int u = (w.axis + 1) % 3, v = (w.axis + 2) % 3;
+    const vec3 low = eighth_box(b, 0).centre(), high = eighth_box(b, 7).centre();
+    const float cu[2] = {low[u], high[u]}, cv[2] = {low[v], high[v]};
+    const float along[2] = {w.sign > 0.0f ? low[w.axis] : high[w.axis], w.sign > 0.0f ? high[w.axis] : low[w.axis]};
+    int cone_jumps[4][2];
+    jumps_along_axis_lattice(model.cone, cu, cv, along, w.axis, w.sign, cone_jumps);
+    ConeWindingBatch<8, true> batch;
+    int eighth[8];
+    for (uint32_t rest = wanted; rest != 0; rest &= rest - 1) {
+      eighth[batch.count] = lowest_set_bit(rest);
+      batch.add(eighth_box(b, eighth[batch.count]).centre());
+    }
+    batch.evaluate(model.cone, kTaylorPointBeta, w.axis);
+    for (int j = 0; j < batch.count; ++j) {
+      const int i = eighth[j];
+      const int l[3] = {i & 1, (i >> 1) & 1, i >> 2};
+      const int k = w.sign > 0.0f ? l[w.axis] : 1 - l[w.axis];
+      TaylorPoint& p = w.point[1 + i];
+      p.w_hat = batch.winding(j) + float(cone_jumps[l[u] + 2 * l[v]][k]);
+      p.gradient = batch.winding_gradient(j);
+      const bool batched = p.w_hat == p.w_hat && is_finite(p.w_hat) && is_finite(p.gradient.x) &&
+                           is_finite(p.gradient.y) && is_finite(p.gradient.z);
+      if (batched || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p)) w.mid |= 1u << i;
+    }
+  }
+#endif
 
   // The six axis directions by how soon the block's centre leaves M's box along them: the first
   // whose swept box holds no ∂M, with its bounds; else the first.
@@ -381,23 +440,12 @@ struct CornerColumnPass {
   }
 };
 
-// Whether CornerColumnPass leaves its cone sums to CornerBatchPass: where the host's lanes batch
-// them (docs/performance.md: the scan's corners); the device sums a corner per thread.
-#if GWNRT_HOST_LANES && defined(__AVX__)
-inline constexpr bool kBatchedCornerSums = true;
-#else
-inline constexpr bool kBatchedCornerSums = false;
-#endif
-
-// Below this many corners in doubt a slot sums them one by one: the batch's traversal of the
-// cone for the points' box costs about a few single sums.
-inline constexpr int kMinCornerBatch = 4;
-
 // Per slot, after CornerColumnPass with defer_cone_sums: the corners it left (deferred_corner)
 // screened together, the cone's jumps ahead of them from one walk of its tree along the slot's
-// lattice and w_C from one traversal for all of them (ConeWindingBatch, at kCornerScreenBeta);
-// each then refined as corner_winding_value does. A corner the batch is unsure of, or a slot
-// with few, takes corner_winding_value.
+// lattice and w_C from one traversal for all of them (ConeWindingBatch, at kCornerScreenBeta),
+// those within kCornerScreenMargin of the level refined as another batch, the exact sums nearer
+// the level one by one (corner_winding_value's steps). A corner the batch is unsure of, or a
+// slot with few, takes corner_winding_value.
 struct CornerBatchPass {
   SparseGridView view;
   ModelView model;
@@ -416,7 +464,7 @@ struct CornerBatchPass {
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
 #if GWNRT_HOST_LANES && defined(__AVX__)
-    if (count >= kMinCornerBatch) {
+    if (count >= kMinConeBatch) {
       batch_sums(b, ray, deferred, count, out);
       return;
     }
@@ -465,7 +513,7 @@ struct CornerBatchPass {
         out[i] = screened - level;
       }
     }
-    const bool refine_in_batch = near_count >= kMinCornerBatch;
+    const bool refine_in_batch = near_count >= kMinConeBatch;
     if (refine_in_batch) {
       batch.count = 0;
       for (int j = 0; j < near_count; ++j) batch.add(position(b, near_level[j]));
@@ -529,6 +577,7 @@ struct HermitePass {
   const BlockWinding* block_winding;  // per slot, or nullptr
   const uint64_t* edges;
   HermitePoint* hermite;
+  bool defer_normals = false;  // smooth roots' normals left to NormalBatchPass
 
   GWNRT_HD void operator()(uint64_t i) const {
     const uint64_t corner = edges[i] / 4;
@@ -540,7 +589,7 @@ struct HermitePass {
     EdgeBound bound;
     const bool bounded = block_winding && edge_bound(corner, axis, p0, bound);
     hermite[i] = edge_hermite(model, winding, level, p0, axis, view.grid.cell, view.corner_value[corner],
-                              view.corner_value_at(n), bounded ? &bound : nullptr);
+                              view.corner_value_at(n), bounded ? &bound : nullptr, defer_normals);
   }
 
   // The finer centre of the corner's block whose bounds' box holds the edge (both its ends), and
@@ -563,6 +612,59 @@ struct HermitePass {
     mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
     out.jumps = jumps[0];
     return true;
+  }
+};
+
+// Per slot, after HermitePass with defer_normals: the normals of its edges' smooth roots
+// (normal_deferred) from one batched traversal of the cone for all of them (∇w = ∇w_C,
+// ConeWindingBatch); a root the batch is unsure of takes smooth_root_gradient.
+struct NormalBatchPass {
+  ModelView model;
+  WindingOptions winding;
+  const uint64_t* edges;  // ascending: a slot's edges are one run
+  uint64_t edge_count;
+  HermitePoint* hermite;
+
+  GWNRT_HD void operator()(uint64_t slot) const {
+    const uint64_t first_key = slot * kBlockItems * 4, end_key = (slot + 1) * kBlockItems * 4;
+    uint64_t lo = 0, hi = edge_count;
+    while (lo < hi) {  // the first edge of the slot
+      const uint64_t mid = lo + (hi - lo) / 2;
+      if (edges[mid] < first_key)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    uint64_t end = lo;
+    while (end < edge_count && edges[end] < end_key) ++end;
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    ConeWindingBatch<kBlockItems, true> batch;
+    uint64_t index[kBlockItems];
+    for (uint64_t i = lo; i < end;) {
+      batch.count = 0;
+      for (; i < end && batch.count < int(kBlockItems); ++i)
+        if (hermite[i].normal_deferred) {
+          index[batch.count] = i;
+          batch.add(hermite[i].point);
+        }
+      if (batch.count < kMinConeBatch) {
+        for (int j = 0; j < batch.count; ++j) finish(hermite[index[j]], vec3(__builtin_nanf("")));
+        continue;
+      }
+      batch.evaluate(model.cone, kHermiteNormalBeta, -1);
+      for (int j = 0; j < batch.count; ++j) finish(hermite[index[j]], batch.winding_gradient(j));
+    }
+#else
+    for (uint64_t i = lo; i < end; ++i)
+      if (hermite[i].normal_deferred) finish(hermite[i], vec3(__builtin_nanf("")));
+#endif
+  }
+
+  // The normal from ∇w, or from smooth_root_gradient where it is NaN.
+  GWNRT_HD void finish(HermitePoint& p, vec3 gradient) const {
+    if (!(gradient.x == gradient.x)) gradient = smooth_root_gradient(model, winding, p.point);
+    p.normal = smooth_normal(gradient, p.normal);
+    p.normal_deferred = false;
   }
 };
 

@@ -48,8 +48,24 @@ struct HermitePoint {
   vec3 normal{0.0f};                      // unit, out of {w > w*}
   uint32_t source_triangle = kEmptyLane;  // input index, for a sheet crossing
   HermiteKind kind = HermiteKind::kFallback;
-  bool capped = false;  // kMaxEdgeCrossings or kMaxRootSteps was reached
+  bool capped = false;           // kMaxEdgeCrossings or kMaxRootSteps was reached
+  bool normal_deferred = false;  // a smooth root whose normal is left to the caller (smooth_normal)
 };
+
+// ∇w at a smooth root, whose direction gives its normal: by crossings, the cone's clusters
+// expanded beyond kHermiteNormalBeta radii rather than the derivatives' 16.
+GWNRT_HD inline vec3 smooth_root_gradient(const ModelView& m, const WindingOptions& winding, const vec3& x) {
+  return resolve_winding_method(m, winding.method) == WindingMethod::kCrossing
+             ? winding_number_crossing<true, false>(m, x, kHermiteNormalBeta).gradient
+             : evaluate_winding(m, x, winding, true, false).gradient;
+}
+
+// A smooth root's normal from ∇w there: out of {w > w*}, or `fallback` (along the edge, out of
+// the inside end) where ∇w vanishes.
+GWNRT_HD inline vec3 smooth_normal(const vec3& gradient, const vec3& fallback) {
+  const float length = glm::length(gradient);
+  return length > 0.0f && is_finite(length) ? -gradient / length : fallback;
+}
 
 namespace detail {
 
@@ -60,7 +76,7 @@ namespace detail {
 template <class Value>
 GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOptions& winding, const vec3& p0,
                                          const vec3& direction, float h, float ta, float fa, float tb, float fb,
-                                         Value value) {
+                                         Value value, bool defer_normal) {
   HermitePoint out;
   out.kind = HermiteKind::kSmooth;
   const bool a_inside = fa > 0.0f;
@@ -90,13 +106,9 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
   out.capped = step == kMaxRootSteps;
   t = 0.5f * (ta + tb);
   out.point = p0 + t * direction;
-  // Only the normal's direction is read: by crossings, the cone's clusters expanded beyond
-  // kHermiteNormalBeta radii rather than the derivatives' 16.
-  const vec3 g = resolve_winding_method(m, winding.method) == WindingMethod::kCrossing
-                     ? winding_number_crossing<true, false>(m, out.point, kHermiteNormalBeta).gradient
-                     : evaluate_winding(m, out.point, winding, true, false).gradient;
-  const float length = glm::length(g);
-  out.normal = length > 0.0f && is_finite(length) ? -g / length : (a_inside ? direction : -direction);
+  out.normal = a_inside ? direction : -direction;
+  out.normal_deferred = defer_normal;
+  if (!defer_normal) out.normal = smooth_normal(smooth_root_gradient(m, winding, out.point), out.normal);
   return out;
 }
 
@@ -115,7 +127,8 @@ namespace detail {
 
 // edge_hermite's walk, w by crossings at `cone_beta` where the method is crossing.
 GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions& winding, float level, const vec3& p0,
-                                       int axis, float h, float f0, float f1, const EdgeBound* bound, float cone_beta) {
+                                       int axis, float h, float f0, float f1, const EdgeBound* bound, float cone_beta,
+                                       bool defer_normal) {
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
@@ -151,7 +164,8 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
     }
     if ((f_start > 0.0f) != (f_end > 0.0f)) {
       const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
-      return smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value);
+      return smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value,
+                         defer_normal);
     }
     if (!found) {
       capped = false;
@@ -195,15 +209,17 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
 // Off a cone (a closed mesh) and with exact w, w is constant between crossings and no w is
 // evaluated at all. With a bound, an interval it settles to one sign, and the side after its
 // crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
-// continuous). The values by crossings are taken at kRootSearchConeBeta.
+// continuous). The values by crossings are taken at kRootSearchConeBeta. With defer_normal a
+// smooth root's normal is left to the caller (normal_deferred; its normal the fallback).
 GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
                                           const vec3& p0, int axis, float h, float f0, float f1,
-                                          const EdgeBound* bound = nullptr) {
-  const HermitePoint out = detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta);
+                                          const EdgeBound* bound = nullptr, bool defer_normal = false) {
+  const HermitePoint out =
+      detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta, defer_normal);
   if (out.kind != HermiteKind::kFallback || out.capped ||
       resolve_winding_method(m, winding.method) != WindingMethod::kCrossing || m.cone.triangle_count == 0)
     return out;
-  return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta);
+  return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta, defer_normal);
 }
 
 }  // namespace gwnrt

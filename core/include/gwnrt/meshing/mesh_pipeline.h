@@ -302,12 +302,12 @@ void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOpt
                          16);
   const uint64_t columns = g.slots * kBlockCells * kBlockCells;
   if (options.progress_total) options.progress_total->fetch_add(columns);
-  const bool batched = kBatchedCornerSums && cone_sums;
+  const bool batched = kBatchedConeSums && cone_sums;
   backend.parallel_for(
       columns,
       CornerColumnPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data(), batched}, 4,
       options.progress);
-  if constexpr (kBatchedCornerSums)
+  if constexpr (kBatchedConeSums)
     if (batched)
       backend.parallel_for(
           g.slots, CornerBatchPass{g.view, model, options.winding, options.level, block_winding, g.corner_value.data()},
@@ -337,11 +337,17 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   backend.parallel_for(items, EdgeListPass{g.view, e.edges.data()});
   e.hermite.resize(e.total);
   if (options.progress_total) options.progress_total->fetch_add(e.total);
+  const bool batched = kBatchedConeSums && model.cone.triangle_count > 0 &&
+                       resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
   backend.parallel_for(
       e.total,
       HermitePass{g.view, model, options.winding, options.level,
-                  g.block_winding.size() ? g.block_winding.data() : nullptr, e.edges.data(), e.hermite.data()},
+                  g.block_winding.size() ? g.block_winding.data() : nullptr, e.edges.data(), e.hermite.data(), batched},
       16, options.progress);
+  if constexpr (kBatchedConeSums)
+    if (batched)
+      backend.parallel_for(g.slots, NormalBatchPass{model, options.winding, e.edges.data(), e.total, e.hermite.data()},
+                           1);
   stats.crossing_edges = e.total;
   typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
   tally.resize(kHermiteTallies);
