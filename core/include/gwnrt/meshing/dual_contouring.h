@@ -105,17 +105,17 @@ GWNRT_HD inline BlockRay block_ray(const MeshGrid& grid, const Aabb& bounds, con
   return {exit.kz, exit.sz > 0.0f ? 1.0f : -1.0f};
 }
 
-// Whether the cone sums of a slot's corners in doubt and of its smooth roots' normals go as
-// batches (CornerBatchPass, NormalBatchPass): where the host's lanes batch them
-// (docs/performance.md: the scan's corners); the device sums a point per thread.
+// Whether the cone sums of a slot's corners in doubt, eighths' centres and smooth roots go as
+// batches (CornerBatchPass, BlockWindingPass, RootBatchPass, NormalBatchPass): where the host's
+// lanes batch them (docs/performance.md: the scan); the device sums a point per thread.
 #if GWNRT_HOST_LANES && defined(__AVX__)
 inline constexpr bool kBatchedConeSums = true;
 #else
 inline constexpr bool kBatchedConeSums = false;
 #endif
 
-// Below this many corners in doubt a slot sums them one by one: the batch's traversal of the
-// cone for the points' box costs about a few single sums.
+// Below this many points a batch is not worth its traversal of the cone for the points' box
+// (about a few single sums): they are summed one by one.
 inline constexpr int kMinConeBatch = 4;
 
 // Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
@@ -578,6 +578,7 @@ struct HermitePass {
   const uint64_t* edges;
   HermitePoint* hermite;
   bool defer_normals = false;  // smooth roots' normals left to NormalBatchPass
+  bool defer_roots = false;    // and their searches to RootBatchPass
 
   GWNRT_HD void operator()(uint64_t i) const {
     const uint64_t corner = edges[i] / 4;
@@ -589,7 +590,7 @@ struct HermitePass {
     EdgeBound bound;
     const bool bounded = block_winding && edge_bound(corner, axis, p0, bound);
     hermite[i] = edge_hermite(model, winding, level, p0, axis, view.grid.cell, view.corner_value[corner],
-                              view.corner_value_at(n), bounded ? &bound : nullptr, defer_normals);
+                              view.corner_value_at(n), bounded ? &bound : nullptr, defer_normals, defer_roots);
   }
 
   // The finer centre of the corner's block whose bounds' box holds the edge (both its ends), and
@@ -615,6 +616,116 @@ struct HermitePass {
   }
 };
 
+// The run [first, end) of the ascending edge list that holds the edges of slot `slot`.
+GWNRT_HD inline void slot_edges(const uint64_t* edges, uint64_t edge_count, uint64_t slot, uint64_t& first,
+                                uint64_t& end) {
+  const uint64_t first_key = slot * kBlockItems * 4, end_key = (slot + 1) * kBlockItems * 4;
+  uint64_t lo = 0, hi = edge_count;
+  while (lo < hi) {
+    const uint64_t mid = lo + (hi - lo) / 2;
+    if (edges[mid] < first_key)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  first = end = lo;
+  while (end < edge_count && edges[end] < end_key) ++end;
+}
+
+// Per slot, after HermitePass with defer_roots: the searches of its edges' smooth roots
+// (root_deferred) stepped together, each step's points as one batch of cone sums at
+// kRootSearchConeBeta (ConeWindingBatch; M's and the cone's jumps ahead along the slot's ray
+// from each point's own walks), a point the batch is unsure of by winding_number_crossing as the
+// search one by one takes it. The normals stay deferred (NormalBatchPass).
+struct RootBatchPass {
+  SparseGridView view;
+  ModelView model;
+  WindingOptions winding;
+  float level;
+  const BlockWinding* block_winding;  // per slot, or nullptr
+  const uint64_t* edges;              // ascending: a slot's edges are one run
+  uint64_t edge_count;
+  HermitePoint* hermite;
+
+  // Edge i's start and direction.
+  struct Line {
+    vec3 p0, direction{0.0f};
+    GWNRT_HD vec3 at(float t) const { return p0 + t * direction; }
+  };
+  GWNRT_HD Line line(uint64_t i) const {
+    Line l;
+    l.p0 = view.grid.corner_position(view.coord_of_item(edges[i] / 4));
+    l.direction[int(edges[i] % 4)] = 1.0f;
+    return l;
+  }
+  GWNRT_HD float value_alone(const vec3& x) const {
+    return winding_number_crossing<false, false>(model, x, kRootSearchConeBeta).w - level;
+  }
+
+  GWNRT_HD void operator()(uint64_t slot) const {
+    uint64_t first, end;
+    slot_edges(edges, edge_count, slot, first, end);
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
+    ConeWindingBatch<kBlockItems> batch;
+    uint64_t index[kBlockItems];
+    IllinoisBracket bracket[kBlockItems];
+    for (uint64_t i = first; i < end;) {
+      int count = 0;
+      for (; i < end && count < int(kBlockItems); ++i)
+        if (hermite[i].root_deferred) {
+          bracket[count] = deferred_bracket(hermite[i], view.grid.cell);
+          index[count++] = i;
+        }
+      int active[kBlockItems];
+      for (int step = 0; step <= kMaxRootSteps; ++step) {  // each bracket takes at most kMaxRootSteps
+        batch.count = 0;
+        for (int j = 0; j < count; ++j)
+          if (bracket[j].active()) {
+            active[batch.count] = j;
+            batch.add(line(index[j]).at(bracket[j].next()));
+          }
+        if (batch.count == 0) break;
+        const bool batched = batch.count >= kMinConeBatch;
+        if (batched) batch.evaluate(model.cone, kRootSearchConeBeta, ray.axis);
+        for (int a = 0; a < batch.count; ++a) {
+          const int j = active[a];
+          const vec3 x = line(index[j]).at(bracket[j].t);
+          const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
+          bracket[j].take(w_cone == w_cone
+                              ? w_cone + float(jumps_ahead(model.cone, x, ray) - jumps_ahead(model.triangles, x, ray)) -
+                                    level
+                              : value_alone(x));
+        }
+      }
+      for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);
+    }
+#else
+    for (uint64_t i = first; i < end; ++i) {
+      if (!hermite[i].root_deferred) continue;
+      const Line l = line(i);
+      IllinoisBracket b = deferred_bracket(hermite[i], view.grid.cell);
+      while (b.active()) b.take(value_alone(l.at(b.next())));
+      finish(i, b);
+    }
+#endif
+  }
+
+  // The jumps of `tree`'s triangles ahead of x along the ray.
+  GWNRT_HD static int jumps_ahead(const TriangleTreeView& tree, const vec3& x, const CornerRay& ray) {
+    const float u[1] = {x[(ray.axis + 1) % 3]}, v[1] = {x[(ray.axis + 2) % 3]}, along[1] = {x[ray.axis]};
+    int jumps[1][1];
+    jumps_along_axis_lattice(tree, u, v, along, ray.axis, ray.sign, jumps);
+    return jumps[0][0];
+  }
+
+  // The root of edge i's finished search, its normal deferred.
+  GWNRT_HD void finish(uint64_t i, const IllinoisBracket& b) const {
+    const Line l = line(i);
+    hermite[i] = smooth_root_point(model, winding, l.p0, l.direction, b, true);
+  }
+};
+
 // Per slot, after HermitePass with defer_normals: the normals of its edges' smooth roots
 // (normal_deferred) from one batched traversal of the cone for all of them (∇w = ∇w_C,
 // ConeWindingBatch); a root the batch is unsure of takes smooth_root_gradient.
@@ -626,17 +737,8 @@ struct NormalBatchPass {
   HermitePoint* hermite;
 
   GWNRT_HD void operator()(uint64_t slot) const {
-    const uint64_t first_key = slot * kBlockItems * 4, end_key = (slot + 1) * kBlockItems * 4;
-    uint64_t lo = 0, hi = edge_count;
-    while (lo < hi) {  // the first edge of the slot
-      const uint64_t mid = lo + (hi - lo) / 2;
-      if (edges[mid] < first_key)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    uint64_t end = lo;
-    while (end < edge_count && edges[end] < end_key) ++end;
+    uint64_t lo, end;
+    slot_edges(edges, edge_count, slot, lo, end);
 #if GWNRT_HOST_LANES && defined(__AVX__)
     ConeWindingBatch<kBlockItems, true> batch;
     uint64_t index[kBlockItems];

@@ -50,6 +50,9 @@ struct HermitePoint {
   HermiteKind kind = HermiteKind::kFallback;
   bool capped = false;           // kMaxEdgeCrossings or kMaxRootSteps was reached
   bool normal_deferred = false;  // a smooth root whose normal is left to the caller (smooth_normal)
+  // A smooth root whose search is left to the caller: until then point holds (ta, fa, tb) and
+  // normal.x fb of its bracket (deferred_bracket).
+  bool root_deferred = false;
 };
 
 // ∇w at a smooth root, whose direction gives its normal: by crossings, the cone's clusters
@@ -67,29 +70,34 @@ GWNRT_HD inline vec3 smooth_normal(const vec3& gradient, const vec3& fallback) {
   return length > 0.0f && is_finite(length) ? -gradient / length : fallback;
 }
 
-namespace detail {
-
 // f = w − w* on the bracket [ta, tb] of one smooth interval (fa, fb of different signs, inside
 // meaning f > 0): Illinois' regula falsi, a bracketed secant method that needs w alone (a Newton
 // step needs ∇w, which the crossing method evaluates at a finer cone beta: several times w's
-// cost), then the normal from ∇w at the root.
-template <class Value>
-GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOptions& winding, const vec3& p0,
-                                         const vec3& direction, float h, float ta, float fa, float tb, float fb,
-                                         Value value, bool defer_normal) {
-  HermitePoint out;
-  out.kind = HermiteKind::kSmooth;
-  const bool a_inside = fa > 0.0f;
+// cost), stopped when the bracket is kRootTolerance of the edge (h) or the secant through its
+// ends puts the root that near the last point, or after kMaxRootSteps. One step at a time
+// (next, then take f there), so that the mesher can step many brackets together.
+struct IllinoisBracket {
+  float ta = 0, fa = 0, tb = 0, fb = 0, h = 0;
+  float t = 0;   // the last point asked for
   int side = 0;  // which end was kept last (Illinois halves the kept end's value)
-  float t = 0.5f * (ta + tb);
-  int step = 0;
-  for (; step < kMaxRootSteps && tb - ta > kRootTolerance * h; ++step) {
+  int steps = 0;
+  bool a_inside = false, converged = false;
+
+  IllinoisBracket() = default;
+  GWNRT_HD IllinoisBracket(float ta_, float fa_, float tb_, float fb_, float h_)
+      : ta(ta_), fa(fa_), tb(tb_), fb(fb_), h(h_), a_inside(fa_ > 0.0f) {}
+  GWNRT_HD bool active() const { return !converged && steps < kMaxRootSteps && tb - ta > kRootTolerance * h; }
+  // The next point to evaluate f at.
+  GWNRT_HD float next() {
     t = fb != fa ? tb - fb * (tb - ta) / (fb - fa) : 0.5f * (ta + tb);
     if (!(t > ta && t < tb)) t = 0.5f * (ta + tb);
-    const float ft = value(t);
+    return t;
+  }
+  GWNRT_HD void take(float ft) {
     if (fabsf(ft) * (tb - ta) <= kRootTolerance * h * fabsf(fb - fa)) {  // the secant's root within tolerance
       ta = tb = t;
-      break;
+      converged = true;
+      return;
     }
     if ((ft > 0.0f) == a_inside) {
       ta = t;
@@ -102,14 +110,41 @@ GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOption
       if (side == 1) fa *= 0.5f;
       side = 1;
     }
+    ++steps;
   }
-  out.capped = step == kMaxRootSteps;
-  t = 0.5f * (ta + tb);
-  out.point = p0 + t * direction;
-  out.normal = a_inside ? direction : -direction;
+  GWNRT_HD float root() const { return 0.5f * (ta + tb); }
+  GWNRT_HD bool capped() const { return steps == kMaxRootSteps; }
+};
+
+// The smooth root of a finished search on the edge from p0 along `direction`, with its normal
+// from ∇w there, or, deferred (normal_deferred), the fallback along the edge until then.
+GWNRT_HD inline HermitePoint smooth_root_point(const ModelView& m, const WindingOptions& winding, const vec3& p0,
+                                               const vec3& direction, const IllinoisBracket& bracket,
+                                               bool defer_normal) {
+  HermitePoint out;
+  out.kind = HermiteKind::kSmooth;
+  out.capped = bracket.capped();
+  out.point = p0 + bracket.root() * direction;
+  out.normal = bracket.a_inside ? direction : -direction;
   out.normal_deferred = defer_normal;
   if (!defer_normal) out.normal = smooth_normal(smooth_root_gradient(m, winding, out.point), out.normal);
   return out;
+}
+
+// The bracket of a root_deferred point, for an edge of length h.
+GWNRT_HD inline IllinoisBracket deferred_bracket(const HermitePoint& p, float h) {
+  return IllinoisBracket(p.point.x, p.point.y, p.point.z, p.normal.x, h);
+}
+
+namespace detail {
+
+// A smooth root from its bracket, searched with `value` (f at a point of the edge).
+template <class Value>
+GWNRT_HD inline HermitePoint smooth_root(const ModelView& m, const WindingOptions& winding, const vec3& p0,
+                                         const vec3& direction, IllinoisBracket bracket, Value value,
+                                         bool defer_normal) {
+  while (bracket.active()) bracket.take(value(bracket.next()));
+  return smooth_root_point(m, winding, p0, direction, bracket, defer_normal);
 }
 
 }  // namespace detail
@@ -128,7 +163,7 @@ namespace detail {
 // edge_hermite's walk, w by crossings at `cone_beta` where the method is crossing.
 GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions& winding, float level, const vec3& p0,
                                        int axis, float h, float f0, float f1, const EdgeBound* bound, float cone_beta,
-                                       bool defer_normal) {
+                                       bool defer_normal, bool defer_root) {
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
@@ -164,8 +199,16 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
     }
     if ((f_start > 0.0f) != (f_end > 0.0f)) {
       const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
-      return smooth_root(m, winding, p0, direction, h, ta, f_start, found ? t_end - offset : h, f_end, value,
-                         defer_normal);
+      const IllinoisBracket bracket(ta, f_start, found ? t_end - offset : h, f_end, h);
+      if (defer_root) {  // the search left to the caller
+        HermitePoint out;
+        out.kind = HermiteKind::kSmooth;
+        out.root_deferred = true;
+        out.point = vec3(bracket.ta, bracket.fa, bracket.tb);
+        out.normal = vec3(bracket.fb, 0.0f, 0.0f);
+        return out;
+      }
+      return smooth_root(m, winding, p0, direction, bracket, value, defer_normal);
     }
     if (!found) {
       capped = false;
@@ -210,16 +253,18 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
 // evaluated at all. With a bound, an interval it settles to one sign, and the side after its
 // crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
 // continuous). The values by crossings are taken at kRootSearchConeBeta. With defer_normal a
-// smooth root's normal is left to the caller (normal_deferred; its normal the fallback).
+// smooth root's normal is left to the caller (normal_deferred; its normal the fallback); with
+// defer_root its search too (root_deferred), except on the walk again at kConeBeta.
 GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
                                           const vec3& p0, int axis, float h, float f0, float f1,
-                                          const EdgeBound* bound = nullptr, bool defer_normal = false) {
+                                          const EdgeBound* bound = nullptr, bool defer_normal = false,
+                                          bool defer_root = false) {
   const HermitePoint out =
-      detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta, defer_normal);
+      detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta, defer_normal, defer_root);
   if (out.kind != HermiteKind::kFallback || out.capped ||
       resolve_winding_method(m, winding.method) != WindingMethod::kCrossing || m.cone.triangle_count == 0)
     return out;
-  return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta, defer_normal);
+  return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta, defer_normal, false);
 }
 
 }  // namespace gwnrt

@@ -339,15 +339,20 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   if (options.progress_total) options.progress_total->fetch_add(e.total);
   const bool batched = kBatchedConeSums && model.cone.triangle_count > 0 &&
                        resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
-  backend.parallel_for(
-      e.total,
-      HermitePass{g.view, model, options.winding, options.level,
-                  g.block_winding.size() ? g.block_winding.data() : nullptr, e.edges.data(), e.hermite.data(), batched},
-      16, options.progress);
+  const BlockWinding* block_winding = g.block_winding.size() ? g.block_winding.data() : nullptr;
+  backend.parallel_for(e.total,
+                       HermitePass{g.view, model, options.winding, options.level, block_winding, e.edges.data(),
+                                   e.hermite.data(), batched, batched},
+                       16, options.progress);
   if constexpr (kBatchedConeSums)
-    if (batched)
+    if (batched) {
+      backend.parallel_for(g.slots,
+                           RootBatchPass{g.view, model, options.winding, options.level, block_winding, e.edges.data(),
+                                         e.total, e.hermite.data()},
+                           1);
       backend.parallel_for(g.slots, NormalBatchPass{model, options.winding, e.edges.data(), e.total, e.hermite.data()},
                            1);
+    }
   stats.crossing_edges = e.total;
   typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
   tally.resize(kHermiteTallies);
