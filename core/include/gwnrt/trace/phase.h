@@ -173,6 +173,13 @@ struct PhaseLanes : PhaseSum<WantGradient> {
 };
 #endif
 
+// Whether φ alone sums its near triangles in double (PhaseLanes::near_quad).
+#if GWNRT_HOST_LANES && defined(__AVX__)
+inline constexpr bool kPhaseNearInDouble = true;
+#else
+inline constexpr bool kPhaseNearInDouble = false;
+#endif
+
 template <bool WantGradient>
 GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta, bool exact) {
   // The exact reference reads every triangle as near: the bound from each segment alone.
@@ -186,12 +193,14 @@ GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta,
 #endif
   PhaseSample out;
   float w;
-  if (exact) {
+  if (exact && (WantGradient || !kPhaseNearInDouble)) {
     const WindingSampleExact s = winding_number_exact(m.cone, x, WantGradient);
     w = float(s.w - floor(s.w));
     out.gradient = vec3(s.gradient);
   } else {
-    // Ω/4π, the near part as Σ atan2 / 2π taken modulo 1 all at once.
+    // Ω/4π, the near part as Σ atan2 / 2π taken modulo 1 all at once. Exact for φ alone on the
+    // host: every triangle was near and summed in double (the reference's terms without an atan2
+    // each, which were most of the mesh report's distances on a scan).
     w = sum.far_field.omega * kInv4Pi + sum.near_angle() * float(0.5 / kPi);
     out.gradient = (sum.far_field.gradient + vec3(sum.near_gradient.total())) * kInv4Pi;
   }
