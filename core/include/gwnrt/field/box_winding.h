@@ -29,6 +29,9 @@ struct BoxFieldBounds {
 struct TaylorPoint {
   vec3 gradient{0.0f};
   float w_hat = 0;
+  GWNRT_HD bool finite() const {
+    return is_finite(w_hat) && is_finite(gradient.x) && is_finite(gradient.y) && is_finite(gradient.z);
+  }
 };
 
 // Work caps: segments tested one by one (a box beside a long stretch of ∂M is left to the
@@ -162,7 +165,7 @@ GWNRT_HD inline bool taylor_point(const ModelView& m, const vec3& x, int axis, f
   if (cone.on_cone) return false;
   out.w_hat = detail::crossing_winding(cone, 0);
   out.gradient = detail::cone_gradient(cone);
-  return is_finite(out.w_hat) && is_finite(out.gradient.x) && is_finite(out.gradient.y) && is_finite(out.gradient.z);
+  return out.finite();
 }
 
 namespace detail {

@@ -318,14 +318,23 @@ struct ConeWindingBatch {
     ++count;
   }
 
+  // Whether point i has a value.
+  GWNRT_FORCEINLINE bool sure(int i) const { return !unsure[i / 8][i % 8]; }
+
   // w_C at point i, or NaN where it is unsure.
   GWNRT_FORCEINLINE float winding(int i) const {
-    return unsure[i / 8][i % 8] ? __builtin_nanf("") : omega[i / 8][i % 8] * float(0.25 * kInvPi);
+    return sure(i) ? omega[i / 8][i % 8] * float(0.25 * kInvPi) : __builtin_nanf("");
+  }
+
+  // w at point i from the jumps of the cone and of M ahead of it along the caller's ray
+  // (detail::crossing_winding's sum), or NaN where it is unsure.
+  GWNRT_FORCEINLINE float crossing_winding(int i, int cone_jumps, int mesh_jumps) const {
+    return float(cone_jumps - mesh_jumps) + winding(i);
   }
 
   // ∇w_C at point i (WantGradient), or NaN where it is unsure.
   GWNRT_FORCEINLINE vec3 winding_gradient(int i) const requires WantGradient {
-    if (unsure[i / 8][i % 8]) return vec3(__builtin_nanf(""));
+    if (!sure(i)) return vec3(__builtin_nanf(""));
     return vec3(gradient[0][i / 8][i % 8], gradient[1][i / 8][i % 8], gradient[2][i / 8][i % 8]) * float(0.25 * kInvPi);
   }
 

@@ -232,11 +232,9 @@ struct BlockWindingPass {
       const int l[3] = {i & 1, (i >> 1) & 1, i >> 2};
       const int k = w.sign > 0.0f ? l[w.axis] : 1 - l[w.axis];
       TaylorPoint& p = w.point[1 + i];
-      p.w_hat = batch.winding(j) + float(cone_jumps[l[u] + 2 * l[v]][k]);
+      p.w_hat = batch.crossing_winding(j, cone_jumps[l[u] + 2 * l[v]][k], 0);
       p.gradient = batch.winding_gradient(j);
-      const bool batched = p.w_hat == p.w_hat && is_finite(p.w_hat) && is_finite(p.gradient.x) &&
-                           is_finite(p.gradient.y) && is_finite(p.gradient.z);
-      if (batched || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p)) w.mid |= 1u << i;
+      if (p.finite() || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p)) w.mid |= 1u << i;
     }
   }
 #endif
@@ -487,13 +485,12 @@ struct CornerBatchPass {
   void batch_sums(const GridCoord& b, const CornerRay& ray, const uint16_t* deferred, int count, float* out) const {
     int cone_jumps[kBlockCells * kBlockCells][kBlockCells];
     block_jumps(model.cone, view.grid, b, ray.axis, ray.sign, cone_jumps);
-    // w at deferred corner i from the batch's w_C (its j-th point), NaN where the batch is
-    // unsure; M's jumps ahead of it in `jumps`.
-    const auto batch_winding = [&](const ConeWindingBatch<kBlockItems>& batch, int j, uint32_t i, int& jumps) {
-      is_deferred_corner(out[i], jumps);
+    // w at deferred corner i, the batch's j-th point, M's jumps ahead of it `jumps`: NaN where
+    // the batch is unsure.
+    const auto batch_winding = [&](const ConeWindingBatch<kBlockItems>& batch, int j, uint32_t i, int jumps) {
       int k;
       const uint32_t column = corner_column(local_coord(i), ray.axis, ray.sign, k);
-      return batch.winding(j) + float(cone_jumps[column][k] - jumps);
+      return batch.crossing_winding(j, cone_jumps[column][k], jumps);
     };
     ConeWindingBatch<kBlockItems> batch;
     for (int j = 0; j < count; ++j) batch.add(position(b, deferred[j]));
@@ -503,6 +500,7 @@ struct CornerBatchPass {
     int near_count = 0, jumps;
     for (int j = 0; j < count; ++j) {
       const uint32_t i = deferred[j];
+      is_deferred_corner(out[i], jumps);
       const float screened = batch_winding(batch, j, i, jumps);
       if (!(screened == screened)) {
         out[i] = corner_winding_value(model, position(b, i), ray.axis, ray.sign, jumps, level) - level;
@@ -522,8 +520,8 @@ struct CornerBatchPass {
     for (int j = 0; j < near_count; ++j) {
       const uint32_t i = near_level[j];
       const vec3 x = position(b, i);
-      const float refined = refine_in_batch ? batch_winding(batch, j, i, jumps) : __builtin_nanf("");
       is_deferred_corner(out[i], jumps);
+      const float refined = refine_in_batch ? batch_winding(batch, j, i, jumps) : __builtin_nanf("");
       out[i] =
           (refined == refined ? exact_corner_winding(model, x, ray.axis, ray.sign, jumps, level, refined)
                               : refined_corner_winding(model, x, ray.axis, ray.sign, jumps, level, near_value[j])) -
@@ -678,24 +676,26 @@ struct RootBatchPass {
           index[count++] = i;
         }
       int active[kBlockItems];
+      vec3 point[kBlockItems];
       for (int step = 0; step <= kMaxRootSteps; ++step) {  // each bracket takes at most kMaxRootSteps
         batch.count = 0;
         for (int j = 0; j < count; ++j)
           if (bracket[j].active()) {
             active[batch.count] = j;
-            batch.add(line(index[j]).at(bracket[j].next()));
+            point[batch.count] = line(index[j]).at(bracket[j].next());
+            batch.add(point[batch.count]);
           }
         if (batch.count == 0) break;
         const bool batched = batch.count >= kMinConeBatch;
         if (batched) batch.evaluate(model.cone, kRootSearchConeBeta, ray.axis);
         for (int a = 0; a < batch.count; ++a) {
-          const int j = active[a];
-          const vec3 x = line(index[j]).at(bracket[j].t);
+          const vec3& x = point[a];
+          // The jumps' walks only where the batch has a value.
           const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
-          bracket[j].take(w_cone == w_cone
-                              ? w_cone + float(jumps_ahead(model.cone, x, ray) - jumps_ahead(model.triangles, x, ray)) -
-                                    level
-                              : value_alone(x));
+          bracket[active[a]].take(w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray),
+                                                                            jumps_ahead(model.triangles, x, ray)) -
+                                                         level
+                                                   : value_alone(x));
         }
       }
       for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);

@@ -284,13 +284,19 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
   return Status::Ok();
 }
 
+// Whether w is summed over the cone (the exact method on a model with a boundary): what the
+// corners' bounds and the batched sums apply to.
+inline bool sums_cone(const ModelView& model, const MeshingOptions& options) {
+  return model.cone.triangle_count > 0 &&
+         resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
+}
+
 // 3. Corner values: w − w* at every corner an active block's cells read.
 template <class Backend>
 void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOptions& options,
                       SparseGridArrays<Backend>& g) {
   g.corner_value.resize(g.slots * kBlockItems);
-  const bool cone_sums = model.cone.triangle_count > 0 &&
-                         resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
+  const bool cone_sums = sums_cone(model, options);
   const BlockWinding* block_winding = nullptr;
   if (options.settle_corners_by_bounds && cone_sums) {
     g.block_winding.resize(g.slots);
@@ -337,8 +343,7 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   backend.parallel_for(items, EdgeListPass{g.view, e.edges.data()});
   e.hermite.resize(e.total);
   if (options.progress_total) options.progress_total->fetch_add(e.total);
-  const bool batched = kBatchedConeSums && model.cone.triangle_count > 0 &&
-                       resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing;
+  const bool batched = kBatchedConeSums && sums_cone(model, options);
   const BlockWinding* block_winding = g.block_winding.size() ? g.block_winding.data() : nullptr;
   backend.parallel_for(e.total,
                        HermitePass{g.view, model, options.winding, options.level, block_winding, e.edges.data(),
