@@ -33,12 +33,27 @@ struct PhaseSample {
 // πL / sqrt(2PQ) (within π/2 up to α = π: near ones). The first is the smaller while α <= 90°
 // (Q >= P >= 8P/π²), so most segments cost one division. The minimum is at most 1.38 times
 // the integral; +inf when x lies on the segment.
-GWNRT_HD inline float segment_inverse_square_integral(float p, float u_dot_v, float cross2, float length) {
-  if (u_dot_v >= 0.0f) return 2.0f * length / (p + u_dot_v);
+// V: float, or a lane vector (every lane takes both forms, then the one that applies).
+template <class V>
+GWNRT_HD GWNRT_FORCEINLINE V segment_inverse_square_integral(V p, V u_dot_v, V cross2, V length) {
+  const V two = V{} + 2.0f;
+  const V far = two * length / (p + u_dot_v);
+  if constexpr (sizeof(V) == sizeof(float))
+    if (u_dot_v >= 0.0f) return far;
   // Q without cancellation when α is near π (x beside the segment): P + u·v = |u×v|² / (P - u·v).
-  const float q = cross2 / (p - u_dot_v);
-  if (!(q > 0.0f)) return kInfinity;
-  return length * min_of(2.0f / q, float(kPi) / sqrtf(2.0f * p * q));
+  const V q = cross2 / (p - u_dot_v);
+  const V chord = two / q, arc = (V{} + float(kPi)) / lane_sqrt(two * p * q);
+  const V near = lane_select(q > V{}, length * lane_select(arc < chord, arc, chord), V{} + kInfinity);
+  return lane_select(u_dot_v >= V{}, far, near);
+}
+
+// The squared distance from x to a segment (endpoints at lengths l1, l2 from x, |u × v|² = cross2;
+// `inside`: x projects inside it): the nearer endpoint, or the line. Without branches: which of
+// the three is nearest varies from segment to segment.
+template <class V, class M>
+GWNRT_HD GWNRT_FORCEINLINE V segment_distance2(V l1, V l2, V cross2, V inverse_length2, M inside) {
+  const V end2 = lane_select(l1 < l2, l1 * l1, l2 * l2);
+  return lane_select(inside, cross2 * inverse_length2, end2);
 }
 
 namespace detail {
@@ -76,10 +91,7 @@ struct PhaseSum {
     const ConeSegment segment = segments[t];
     if (!(segment.length > 0.0f)) return;
     integral += segment_inverse_square_integral(float(l1 * l2), float(d12), cross2, segment.length);
-    // Without branches (which of the three is nearest varies from segment to segment): the
-    // nearer endpoint, or the line when x projects inside the segment.
-    const float end2 = float(l1 < l2 ? l1 * l1 : l2 * l2);
-    const float dist2 = inside ? cross2 * segment.inverse_length2 : end2;
+    const float dist2 = segment_distance2(float(l1), float(l2), cross2, segment.inverse_length2, inside);
     nearest2 = dist2 < nearest2 ? dist2 : nearest2;
   }
 
@@ -135,6 +147,7 @@ struct PhaseLanes : PhaseSum<WantGradient> {
   }
 #if defined(__AVX__)
   UnwrappedAngleSumT<d4, l4> near_angles{};
+  d4 near_integral{}, near_nearest2 = d4{} + kInfinity;
 
   // w alone: a leaf's near triangles four at a time in double, PhaseSum::near's terms (the near
   // triangles' sums were most of a query once the far lanes went together).
@@ -149,11 +162,22 @@ struct PhaseLanes : PhaseSum<WantGradient> {
     const d4 zero{};
     // Unused lanes: the factor 0, which has no angle.
     near_angles.add(lane_select(used, tangent.numerator, zero), lane_select(used, tangent.denominator, zero));
-    for (uint32_t l = 0; l < count; ++l) {
-      const double l1 = tangent.lb[l], l2 = tangent.lc[l], d12 = tangent.bc[l];
-      // e = b − a: a·e = d12 − l1², b·e = l2² − d12.
-      Base::add_segment(first + l, l1, l2, d12, float(tangent.cross2[l]), d12 - l1 * l1 < 0.0 && l2 * l2 - d12 > 0.0);
-    }
+    // The segments' shares of the bound and their distances as lanes (PhaseSum::add_segment's).
+    const ConeSegment* segment = Base::segments + first;
+    const uint32_t last = count - 1;
+    const uint32_t m1 = last < 1 ? last : 1, m2 = last < 2 ? last : 2, m3 = last < 3 ? last : 3;
+    const d4 length{segment[0].length, segment[m1].length, segment[m2].length, segment[m3].length};
+    const d4 inverse_length2{segment[0].inverse_length2, segment[m1].inverse_length2, segment[m2].inverse_length2,
+                             segment[m3].inverse_length2};
+    const d4 &l1 = tangent.lb, &l2 = tangent.lc, &d12 = tangent.bc;
+    // An inner triangle of a spanned loop carries none (length 0).
+    const l4 counted = used & (length > zero);
+    const d4 integral = segment_inverse_square_integral(l1 * l2, d12, tangent.cross2, length);
+    near_integral += lane_select(counted, integral, zero);
+    // e = b − a: a·e = d12 − l1², b·e = l2² − d12.
+    const d4 dist2 =
+        segment_distance2(l1, l2, tangent.cross2, inverse_length2, (d12 - l1 * l1 < zero) & (l2 * l2 - d12 > zero));
+    near_nearest2 = lane_select(counted & (dist2 < near_nearest2), dist2, near_nearest2);
   }
   float near_angle() const {
     UnwrappedAngleSum lanes;
@@ -167,6 +191,12 @@ struct PhaseLanes : PhaseSum<WantGradient> {
     Base::far_field.omega += lane_sum(far_omega);
     Base::integral += lane_sum(far_integral);
     for (int l = 0; l < 4; ++l) Base::nearest2 = min_of(Base::nearest2, far_nearest2[l]);
+#if defined(__AVX__)
+    if constexpr (!WantGradient) {
+      Base::integral += float(near_integral[0] + near_integral[1] + near_integral[2] + near_integral[3]);
+      for (int l = 0; l < 4; ++l) Base::nearest2 = min_of(Base::nearest2, float(near_nearest2[l]));
+    }
+#endif
     if constexpr (WantGradient)
       for (int k = 0; k < 3; ++k) Base::far_field.gradient[k] += lane_sum(far_gradient[k]);
   }
@@ -185,7 +215,17 @@ GWNRT_HD PhaseSample sample_phase(const ModelView& m, const vec3& x, float beta,
   // The exact reference reads every triangle as near: the bound from each segment alone.
 #if GWNRT_HOST_LANES
   PhaseLanes<WantGradient> sum{{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}}};
-  visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
+#if defined(__AVX__)
+  if constexpr (!WantGradient) {
+    // Every triangle near: one sweep over them in the tree's order, without the traversal (the
+    // traversal was half of the report's distances from its output on a scan).
+    if (exact)
+      sum.near_leaf(0, m.cone.triangle_count);
+    else
+      visit_multipole(m.cone, x, beta, sum);
+  } else
+#endif
+    visit_multipole(m.cone, x, exact ? kInfinity : beta, sum);
   sum.fold();
 #else
   PhaseSum<WantGradient> sum{m.cone, m.cone_boundary_lengths, m.cone_segments, x, {}, {}, {}, kInfinity, 0.0f, {}};
