@@ -135,7 +135,6 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     test::Random random(31);
     int sure = 0, unsure = 0;
     // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
-    // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
     const auto batch_w = [&](float w_cone, const vec3& x, int axis, float sign) {
       const float u[1] = {x[(axis + 1) % 3]}, v[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
       int mesh_jumps[1][1], cone_jumps[1][1];

@@ -175,16 +175,31 @@ struct BlockWindingPass {
   BlockWinding* out;
 
   GWNRT_HD void operator()(uint64_t slot) const {
+    const GridCoord b = begin(slot);
+    BlockWinding& w = out[slot];
+    if (w.bounds[0].usable) w.block = taylor_point(model, block_box(b).centre(), w.axis, w.sign, w.point[0]);
+    finish(slot, b);
+  }
+
+  GWNRT_HD Aabb block_box(const GridCoord& b) const { return corner_box(view.grid, b, {0, 0, 0}, kBlockCells); }
+
+  // The slot's block, its BlockWinding cleared and its ray chosen.
+  GWNRT_HD GridCoord begin(uint64_t slot) const {
     BlockWinding& w = out[slot];
     w = BlockWinding{};
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
-    const Aabb block = corner_box(view.grid, b, {0, 0, 0}, kBlockCells);
+    const Aabb block = block_box(b);
+    choose_ray(block, block.centre(), w);
+    return b;
+  }
+
+  // After the block's centre (w.block): its eighths' centres where the block's leaves corners
+  // unsettled.
+  GWNRT_HD void finish(uint64_t slot, const GridCoord& b) const {
+    BlockWinding& w = out[slot];
+    const Aabb block = block_box(b);
     const vec3 centre = block.centre();
-    choose_ray(block, centre, w);
-    if (w.bounds[0].usable) {
-      w.block = taylor_point(model, centre, w.axis, w.sign, w.point[0]);
-      if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return;
-    }
+    if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return;
     uint32_t wanted = 0;  // the eighths whose centres are to be computed
     for (int i = 0; i < 8; ++i) {
       const Aabb mid = eighth_box(b, i);
@@ -210,6 +225,62 @@ struct BlockWindingPass {
   }
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
+  // The blocks of a 2 × 2 × 2 group at once, by the group's first slot (the others do nothing):
+  // their centres from one batched traversal of the cone for each ray among them (ŵ = w_C plus
+  // the cone's jumps ahead along the block's ray, each from a walk of its own; ∇w = ∇w_C), as
+  // taylor_point gives them; a centre the batch is unsure of takes taylor_point. Slots are in
+  // block order, so the group's first slot is its first block's.
+  void group(uint64_t slot) const {
+    const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
+    const GridCoord g{b.x & ~1, b.y & ~1, b.z & ~1};
+    uint64_t member[8];
+    GridCoord member_block[8];
+    int members = 0;
+    for (int i = 0; i < 8; ++i) {
+      const GridCoord m{g.x + (i & 1), g.y + ((i >> 1) & 1), g.z + (i >> 2)};
+      if (m.x >= view.grid.blocks[0] || m.y >= view.grid.blocks[1] || m.z >= view.grid.blocks[2]) continue;
+      const uint32_t s = view.slot_of_block[view.grid.block_index(m.x, m.y, m.z)];
+      if (s == kEmptyLane) continue;
+      if (members == 0 && s != slot) return;  // not the group's first
+      member[members] = s;
+      member_block[members++] = m;
+    }
+    uint32_t pending = 0;  // members whose centre is wanted and not yet summed
+    for (int i = 0; i < members; ++i) {
+      begin(member[i]);
+      if (out[member[i]].bounds[0].usable) pending |= 1u << i;
+    }
+    while (pending != 0) {  // one batch for each ray among the members
+      const BlockWinding& first = out[member[lowest_set_bit(pending)]];
+      const int axis = first.axis;
+      const float sign = first.sign;
+      ConeWindingBatch<8, true> batch;
+      int in_batch[8];
+      for (uint32_t rest = pending; rest != 0; rest &= rest - 1) {
+        const int i = lowest_set_bit(rest);
+        if (out[member[i]].axis != axis || out[member[i]].sign != sign) continue;
+        pending &= ~(1u << i);
+        in_batch[batch.count] = i;
+        batch.add(block_box(member_block[i]).centre());
+      }
+      if (batch.count >= kMinConeBatch) batch.evaluate(model.cone, kTaylorPointBeta, axis);
+      for (int j = 0; j < batch.count; ++j) {
+        BlockWinding& w = out[member[in_batch[j]]];
+        const vec3 centre = block_box(member_block[in_batch[j]]).centre();
+        TaylorPoint& p = w.point[0];
+        if (batch.count >= kMinConeBatch) {
+          const float u[1] = {centre[(axis + 1) % 3]}, v[1] = {centre[(axis + 2) % 3]}, along[1] = {centre[axis]};
+          int cone_jumps[1][1];
+          jumps_along_axis_lattice(model.cone, u, v, along, axis, sign, cone_jumps);
+          p.w_hat = batch.crossing_winding(j, cone_jumps[0][0], 0);
+          p.gradient = batch.winding_gradient(j);
+        }
+        w.block = (batch.count >= kMinConeBatch && p.finite()) || taylor_point(model, centre, axis, sign, p);
+      }
+    }
+    for (int i = 0; i < members; ++i) finish(member[i], member_block[i]);
+  }
+
   // The centres of the eighths in `wanted` from one batched traversal of the cone (ŵ = w_C plus
   // the cone's jumps ahead along the block's ray, from a walk of the eighths' 2 × 2 lattice of
   // lines; ∇w = ∇w_C), as taylor_point gives them; one the batch is unsure of takes taylor_point.

@@ -300,7 +300,12 @@ void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOpt
   const BlockWinding* block_winding = nullptr;
   if (options.settle_corners_by_bounds && cone_sums) {
     g.block_winding.resize(g.slots);
-    backend.parallel_for(g.slots, BlockWindingPass{g.view, model, options.level, g.block_winding.data()});
+    const BlockWindingPass pass{g.view, model, options.level, g.block_winding.data()};
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    backend.parallel_for(g.slots, [=](uint64_t slot) { pass.group(slot); });
+#else
+    backend.parallel_for(g.slots, pass);
+#endif
     block_winding = g.block_winding.data();
   }
   if (resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing)
