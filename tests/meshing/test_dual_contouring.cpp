@@ -266,5 +266,83 @@ TEST(MeshingEdges, SmoothRootsLieOnSWithinTheSearchsError) {
   }
 }
 
+// A walk that stops for each value before a crossing of M (value_deferred), given them one at a
+// time as a batch would (by winding_number_crossing here, as the walk sums them itself), ends
+// on the very Hermite point of the walk that sums them itself, also past kDeferredEdgeValues.
+TEST(MeshingEdges, DeferredValuesGiveTheWalksOwnPoint) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj"}) {
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView view = model.view();
+    const BoundaryCurve& rim = model.boundary();
+    const float diagonal = glm::length(model.bounds().hi - model.bounds().lo);
+    WindingOptions winding;
+    winding.method = WindingMethod::kCrossing;
+    test::Random random(29);
+    int deferred = 0, many = 0;
+    for (int edge = 0; edge < 4000; ++edge) {
+      // Short edges by the rims, and long ones across the model (many crossings).
+      const bool long_edge = edge % 4 == 0;
+      const float h = (long_edge ? 0.5f : 0.01f) * diagonal;
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const vec3 p0 = long_edge ? random.in_box(model.bounds())
+                                : glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1)) +
+                                      random.uniform(0.1f * h, 2.0f * h) * random.unit();
+      const int axis = random.index(3);
+      vec3 p1 = p0;
+      p1[axis] += h;
+      const float f0 = root_search_value(view, p0, 0.5f), f1 = root_search_value(view, p1, 0.5f);
+      if ((f0 > 0.0f) == (f1 > 0.0f)) continue;
+      const HermitePoint direct = edge_hermite(view, winding, 0.5f, p0, axis, h, f0, f1);
+      EdgeValues values{};
+      HermitePoint walked = edge_hermite(view, winding, 0.5f, p0, axis, h, f0, f1, nullptr, false, false, &values);
+      for (int round = 0; walked.value_deferred; ++round) {
+        ASSERT_LT(round, kDeferredEdgeValues) << name << " edge " << edge << ": the walk stops past its cap";
+        values.value[values.count++] = root_search_value(view, walked.point, 0.5f);
+        walked = edge_hermite(view, winding, 0.5f, p0, axis, h, f0, f1, nullptr, false, false, &values);
+      }
+      deferred += values.count > 0;
+      many += values.count == kDeferredEdgeValues;
+      EXPECT_EQ(walked.kind, direct.kind) << name << " edge " << edge;
+      EXPECT_EQ(walked.point, direct.point) << name << " edge " << edge;
+      EXPECT_EQ(walked.normal, direct.normal) << name << " edge " << edge;
+    }
+    EXPECT_GE(deferred, 50) << name << ": few walks stopped for a value";
+    std::printf("%s: %d walks stopped for values, %d up to the cap\n", name, deferred, many);
+  }
+  // Past the cap: an edge through a stack of twelve open squares, the level near w above the top
+  // one, so that the walk takes more values than the cap before its sign changes.
+  Mesh stack;
+  for (int k = 0; k < 12; ++k) {
+    const float z = 0.1f * float(k);
+    const uint32_t b = uint32_t(stack.positions.size());
+    stack.positions.insert(stack.positions.end(), {{-1, -1, z}, {1, -1, z}, {1, 1, z}, {-1, 1, z}});
+    stack.triangles.insert(stack.triangles.end(), {{b, b + 1, b + 2}, {b, b + 2, b + 3}});
+  }
+  const GwnModel model = test::build_model(stack);
+  const ModelView view = model.view();
+  const vec3 p0(0.1f, 0.13f, -0.05f);
+  const float h = 1.2f;
+  const float level = 0.5f * (root_search_value(view, p0 + vec3(0, 0, 1.05f), 0.0f) +
+                              root_search_value(view, p0 + vec3(0, 0, 1.15f), 0.0f));
+  const float f0 = root_search_value(view, p0, level), f1 = root_search_value(view, p0 + vec3(0, 0, h), level);
+  ASSERT_NE(f0 > 0.0f, f1 > 0.0f);
+  WindingOptions winding;
+  winding.method = WindingMethod::kCrossing;
+  const HermitePoint direct = edge_hermite(view, winding, level, p0, 2, h, f0, f1);
+  EdgeValues values{};
+  HermitePoint walked = edge_hermite(view, winding, level, p0, 2, h, f0, f1, nullptr, false, false, &values);
+  while (walked.value_deferred) {
+    ASSERT_LT(values.count, kDeferredEdgeValues);
+    values.value[values.count++] = root_search_value(view, walked.point, level);
+    walked = edge_hermite(view, winding, level, p0, 2, h, f0, f1, nullptr, false, false, &values);
+  }
+  EXPECT_EQ(values.count, kDeferredEdgeValues);
+  EXPECT_EQ(walked.kind, direct.kind);
+  EXPECT_EQ(walked.point, direct.point);
+  EXPECT_EQ(walked.kind, HermiteKind::kSheet);  // on a square beyond the eighth
+  EXPECT_NEAR(walked.point.z, 0.1f * std::round(10.0f * walked.point.z), 1e-5f);
+  EXPECT_GT(walked.point.z, 0.75f);
+}
+
 }  // namespace
 }  // namespace gwnrt

@@ -648,8 +648,15 @@ struct HermitePass {
   HermitePoint* hermite;
   bool defer_normals = false;  // smooth roots' normals left to NormalBatchPass
   bool defer_roots = false;    // and their searches to RootBatchPass
+  bool defer_values = false;   // and the values before crossings of M to WalkBatchPass
 
   GWNRT_HD void operator()(uint64_t i) const {
+    const EdgeValues none{};
+    hermite[i] = walk(i, defer_values ? &none : nullptr);
+  }
+
+  // Edge i's Hermite point, given the values before its crossings that its walk asked for.
+  GWNRT_HD HermitePoint walk(uint64_t i, const EdgeValues* values) const {
     const uint64_t corner = edges[i] / 4;
     const int axis = int(edges[i] % 4);
     const GridCoord c = view.coord_of_item(corner);
@@ -658,8 +665,8 @@ struct HermitePass {
     const vec3 p0 = view.grid.corner_position(c);
     EdgeBound bound;
     const bool bounded = block_winding && edge_bound(corner, axis, p0, bound);
-    hermite[i] = edge_hermite(model, winding, level, p0, axis, view.grid.cell, view.corner_value[corner],
-                              view.corner_value_at(n), bounded ? &bound : nullptr, defer_normals, defer_roots);
+    return edge_hermite(model, winding, level, p0, axis, view.grid.cell, view.corner_value[corner],
+                        view.corner_value_at(n), bounded ? &bound : nullptr, defer_normals, defer_roots, values);
   }
 
   // The finer centre of the corner's block whose bounds' box holds the edge (both its ends), and
@@ -701,6 +708,73 @@ GWNRT_HD inline void slot_edges(const uint64_t* edges, uint64_t edge_count, uint
   while (end < edge_count && edges[end] < end_key) ++end;
 }
 
+// The jumps of `tree`'s triangles ahead of x along the ray.
+GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, const CornerRay& ray) {
+  const float u[1] = {x[(ray.axis + 1) % 3]}, v[1] = {x[(ray.axis + 2) % 3]}, along[1] = {x[ray.axis]};
+  int jumps[1][1];
+  jumps_along_axis_lattice(tree, u, v, along, ray.axis, ray.sign, jumps);
+  return jumps[0][0];
+}
+
+// w − w* at x by crossings at kRootSearchConeBeta: what an edge's walk and root search take
+// where a batch has no value.
+GWNRT_HD inline float root_search_value(const ModelView& m, const vec3& x, float level) {
+  return winding_number_crossing<false, false>(m, x, kRootSearchConeBeta).w - level;
+}
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// Per slot, after HermitePass with defer_values: the values its edges' walks stopped for (w − w*
+// before a crossing of M, value_deferred) summed as one batch at kRootSearchConeBeta, as
+// RootBatchPass sums its points, and the walks taken again with them, round after round until
+// none stops (each walk stops at most kDeferredEdgeValues times, then sums alone).
+struct WalkBatchPass {
+  HermitePass walks;  // with defer_values
+  uint64_t edge_count;
+
+  void operator()(uint64_t slot) const {
+    uint64_t first, end;
+    slot_edges(walks.edges, edge_count, slot, first, end);
+    const ModelView& model = walks.model;
+    const CornerRay ray = corner_ray(walks.view, model, walks.winding, walks.block_winding, uint32_t(slot));
+    HermitePoint* hermite = walks.hermite;
+    ConeWindingBatch<kBlockItems> batch;
+    uint64_t index[kBlockItems];
+    EdgeValues values[kBlockItems];
+    for (uint64_t i = first; i < end;) {
+      int count = 0;
+      for (; i < end && count < int(kBlockItems); ++i)
+        if (hermite[i].value_deferred) {
+          values[count].count = 0;
+          index[count++] = i;
+        }
+      int active[kBlockItems];
+      for (int round = 0; round <= kDeferredEdgeValues; ++round) {
+        batch.count = 0;
+        for (int j = 0; j < count; ++j)
+          if (hermite[index[j]].value_deferred) {
+            active[batch.count] = j;
+            batch.add(hermite[index[j]].point);
+          }
+        if (batch.count == 0) break;
+        const bool batched = batch.count >= kMinConeBatch;
+        if (batched) batch.evaluate(model.cone, kRootSearchConeBeta, ray.axis);
+        for (int a = 0; a < batch.count; ++a) {
+          const int j = active[a];
+          const vec3 x = hermite[index[j]].point;
+          const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
+          values[j].value[values[j].count++] =
+              w_cone == w_cone
+                  ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray), jumps_ahead(model.triangles, x, ray)) -
+                        walks.level
+                  : root_search_value(model, x, walks.level);
+          hermite[index[j]] = walks.walk(index[j], &values[j]);
+        }
+      }
+    }
+  }
+};
+#endif
+
 // Per slot, after HermitePass with defer_roots: the searches of its edges' smooth roots
 // (root_deferred) stepped together, each step's points as one batch of cone sums at
 // kRootSearchConeBeta (ConeWindingBatch; M's and the cone's jumps ahead along the slot's ray
@@ -726,9 +800,6 @@ struct RootBatchPass {
     l.p0 = view.grid.corner_position(view.coord_of_item(edges[i] / 4));
     l.direction[int(edges[i] % 4)] = 1.0f;
     return l;
-  }
-  GWNRT_HD float value_alone(const vec3& x) const {
-    return winding_number_crossing<false, false>(model, x, kRootSearchConeBeta).w - level;
   }
 
   GWNRT_HD void operator()(uint64_t slot) const {
@@ -766,7 +837,7 @@ struct RootBatchPass {
           bracket[active[a]].take(w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray),
                                                                             jumps_ahead(model.triangles, x, ray)) -
                                                          level
-                                                   : value_alone(x));
+                                                   : root_search_value(model, x, level));
         }
       }
       for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);
@@ -776,18 +847,10 @@ struct RootBatchPass {
       if (!hermite[i].root_deferred) continue;
       const Line l = line(i);
       IllinoisBracket b = deferred_bracket(hermite[i], view.grid.cell);
-      while (b.active()) b.take(value_alone(l.at(b.next())));
+      while (b.active()) b.take(root_search_value(model, l.at(b.next()), level));
       finish(i, b);
     }
 #endif
-  }
-
-  // The jumps of `tree`'s triangles ahead of x along the ray.
-  GWNRT_HD static int jumps_ahead(const TriangleTreeView& tree, const vec3& x, const CornerRay& ray) {
-    const float u[1] = {x[(ray.axis + 1) % 3]}, v[1] = {x[(ray.axis + 2) % 3]}, along[1] = {x[ray.axis]};
-    int jumps[1][1];
-    jumps_along_axis_lattice(tree, u, v, along, ray.axis, ray.sign, jumps);
-    return jumps[0][0];
   }
 
   // The root of edge i's finished search, its normal deferred.

@@ -53,6 +53,18 @@ struct HermitePoint {
   // A smooth root whose search is left to the caller: until then point holds (ta, fa, tb) and
   // normal.x fb of its bracket (deferred_bracket).
   bool root_deferred = false;
+  // A walk that stopped for w − w* at `point` (before a crossing of M): the caller sums it and
+  // walks the edge again with it (EdgeValues).
+  bool value_deferred = false;
+};
+
+// The values of w − w* that an edge's walk asked for before its crossings of M, in the order
+// asked, for a caller that sums them in batches: the walk takes these and stops at the next it
+// needs (value_deferred); once kDeferredEdgeValues are taken it sums the rest itself.
+inline constexpr int kDeferredEdgeValues = 8;
+struct EdgeValues {
+  float value[kDeferredEdgeValues];
+  int count = 0;
 };
 
 // ∇w at a smooth root, whose direction gives its normal: by crossings, the cone's clusters
@@ -163,7 +175,7 @@ namespace detail {
 // edge_hermite's walk, w by crossings at `cone_beta` where the method is crossing.
 GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions& winding, float level, const vec3& p0,
                                        int axis, float h, float f0, float f1, const EdgeBound* bound, float cone_beta,
-                                       bool defer_normal, bool defer_root) {
+                                       bool defer_normal, bool defer_root, const EdgeValues* values = nullptr) {
   vec3 direction(0.0f);
   direction[axis] = 1.0f;
   const RayFrame frame = make_ray_frame(p0, direction);
@@ -180,6 +192,7 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
   float t_start = 0.0f, f_start = f0;
   uint32_t index_after = kEmptyLane;
   bool capped = true;
+  int values_used = 0;
   for (int k = 0; k < kMaxEdgeCrossings; ++k) {
     CrossingHit hit;
     const bool found = next_crossing<true>(m.triangles.bvh, m.triangles.vertices, frame, t_start, index_after, h, hit);
@@ -192,10 +205,18 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
                                  p0 + (t_end - offset) * direction - bound->centre, level, f_start > 0.0f))
         f_after_settled = taylor_estimate(bound->point, bound->bounds, jumps - hit.jump,
                                           p0 + t_end * direction - bound->centre, level);
-      if (f_after_settled == f_after_settled)
+      if (f_after_settled == f_after_settled || constant) {
         f_end = f_start;  // its sign, which is all that is read of it
-      else
-        f_end = constant ? f_start : value(t_end - offset);
+      } else if (values && values_used < values->count) {
+        f_end = values->value[values_used++];
+      } else if (values && values_used < kDeferredEdgeValues) {
+        HermitePoint out;
+        out.value_deferred = true;
+        out.point = p0 + (t_end - offset) * direction;
+        return out;
+      } else {
+        f_end = value(t_end - offset);
+      }
     }
     if ((f_start > 0.0f) != (f_end > 0.0f)) {
       const float ta = t_start + (k > 0 && t_end - t_start >= 2.0f * offset ? offset : 0.0f);
@@ -254,14 +275,15 @@ GWNRT_HD inline HermitePoint walk_edge(const ModelView& m, const WindingOptions&
 // crossing when settled too, take no evaluation either (J falls by each crossing's jump, ŵ being
 // continuous). The values by crossings are taken at kRootSearchConeBeta. With defer_normal a
 // smooth root's normal is left to the caller (normal_deferred; its normal the fallback); with
-// defer_root its search too (root_deferred), except on the walk again at kConeBeta.
+// defer_root its search too (root_deferred), except on the walk again at kConeBeta; with
+// `values` the values before crossings of M beyond those given (value_deferred).
 GWNRT_HD inline HermitePoint edge_hermite(const ModelView& m, const WindingOptions& winding, float level,
                                           const vec3& p0, int axis, float h, float f0, float f1,
                                           const EdgeBound* bound = nullptr, bool defer_normal = false,
-                                          bool defer_root = false) {
-  const HermitePoint out =
-      detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta, defer_normal, defer_root);
-  if (out.kind != HermiteKind::kFallback || out.capped ||
+                                          bool defer_root = false, const EdgeValues* values = nullptr) {
+  const HermitePoint out = detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kRootSearchConeBeta,
+                                             defer_normal, defer_root, values);
+  if (out.kind != HermiteKind::kFallback || out.value_deferred || out.capped ||
       resolve_winding_method(m, winding.method) != WindingMethod::kCrossing || m.cone.triangle_count == 0)
     return out;
   return detail::walk_edge(m, winding, level, p0, axis, h, f0, f1, bound, kConeBeta, defer_normal, false);

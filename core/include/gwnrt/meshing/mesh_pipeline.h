@@ -350,12 +350,14 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   if (options.progress_total) options.progress_total->fetch_add(e.total);
   const bool batched = kBatchedConeSums && sums_cone(model, options);
   const BlockWinding* block_winding = g.block_winding.size() ? g.block_winding.data() : nullptr;
-  backend.parallel_for(e.total,
-                       HermitePass{g.view, model, options.winding, options.level, block_winding, e.edges.data(),
-                                   e.hermite.data(), batched, batched},
-                       16, options.progress);
+  const HermitePass walks{g.view,           model,   options.winding, options.level, block_winding, e.edges.data(),
+                          e.hermite.data(), batched, batched,         batched};
+  backend.parallel_for(e.total, walks, 16, options.progress);
   if constexpr (kBatchedConeSums)
     if (batched) {
+#if GWNRT_HOST_LANES && defined(__AVX__)
+      backend.parallel_for(g.slots, WalkBatchPass{walks, e.total}, 1);
+#endif
       backend.parallel_for(g.slots,
                            RootBatchPass{g.view, model, options.winding, options.level, block_winding, e.edges.data(),
                                          e.total, e.hermite.data()},
