@@ -225,6 +225,45 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
 }
 #endif
 
+// The scout's first-order test: a block it settles (no sheet within it, ŵ's range over it clear
+// of every w* + n) holds no point of S: w − w* keeps one sign at every corner of a fine lattice
+// over it (exact w by crossings). Blocks of 8 cells at 256³ by the rims and across the box.
+TEST(MeshingScout, BlocksSettledByBoundsHoldNoSurface) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj", "realworld/birdBath_ggg_photogrammetry.obj"}) {
+    GwnModel model = test::build_model(test::load_test_mesh(name));
+    ASSERT_TRUE(model.set_sheet_level(0.5f).ok());
+    const ModelView view = model.view();
+    const BoundaryCurve& rim = model.boundary();
+    const float h = glm::length(model.bounds().hi - model.bounds().lo) / 256.0f;
+    const ScoutQuery scout{view, 0.5f, 2.0f, true, true};
+    test::Random random(41);
+    int settled = 0, tried = 0;
+    for (int block = 0; block < 3000; ++block) {
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const vec3 lo = block % 2 ? random.in_box(model.bounds())
+                                : glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1)) +
+                                      random.uniform(2.0f * h, 24.0f * h) * random.unit();
+      const Aabb box{lo, lo + vec3(8.0f * h)};
+      const vec3 centre = box.centre();
+      // The scout asks this only of blocks no sheet is within.
+      if (unsigned_distance(view.sheets, centre).distance <= kScoutSlack * 0.5f * glm::length(box.hi - box.lo))
+        continue;
+      ++tried;
+      if (!scout.settled_by_bounds(box)) continue;
+      ++settled;
+      const bool inside = winding_number_crossing<false, false>(view, lo).w > 0.5f;
+      for (int k = 0; k < 9 * 9 * 9; ++k) {
+        const vec3 x = lo + h * vec3(float(k % 9), float(k / 9 % 9), float(k / 81));
+        const bool x_inside = winding_number_crossing<false, false>(view, x).w > 0.5f;
+        ASSERT_EQ(x_inside, inside) << name << " block " << block << " corner " << k;
+      }
+    }
+    std::printf("%s: %d of %d blocks settled by bounds\n", name, settled, tried);
+    EXPECT_GE(settled, 100) << name;
+    EXPECT_LT(settled, tried) << name;
+  }
+}
+
 // The edges' smooth roots, searched with w at kRootSearchConeBeta (within 1e-4 of the exact): by
 // the double brute force each lies on S up to the bracket's width (kRootTolerance of the edge) or
 // that error, on edges across S by the rims of open meshes.

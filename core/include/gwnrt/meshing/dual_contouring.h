@@ -30,18 +30,64 @@ inline constexpr float kScoutSlack = 1.001f;
 // Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
 // above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
 // another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
+// The ray a block's first-order estimate of ŵ is taken along: the first of the six axis
+// directions, nearest exit of M's box first, whose swept box holds no ∂M (its bounds usable),
+// else the nearest exit's.
+struct BlockRayChoice {
+  int axis = 2;
+  float sign = 1.0f;
+  BoxFieldBounds bounds;
+};
+GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block) {
+  const vec3 centre = block.centre();
+  float exit[6];
+  for (int d = 0; d < 6; ++d)
+    exit[d] = d & 1 ? centre[d / 2] - model.bounds.lo[d / 2] : model.bounds.hi[d / 2] - centre[d / 2];
+  int order[6] = {0, 1, 2, 3, 4, 5};
+  for (int i = 1; i < 6; ++i)
+    for (int j = i; j > 0 && exit[order[j]] < exit[order[j - 1]]; --j) {
+      const int t = order[j];
+      order[j] = order[j - 1];
+      order[j - 1] = t;
+    }
+  BlockRayChoice out;
+  for (int i = 0; i < 6; ++i) {
+    const int axis = order[i] / 2;
+    const float sign = order[i] & 1 ? -1.0f : 1.0f;
+    const BoxFieldBounds bounds = box_field_bounds(model, block, axis, sign);
+    if (i == 0 || bounds.usable) out = {axis, sign, bounds};
+    if (bounds.usable) break;
+  }
+  return out;
+}
+
 struct ScoutQuery {
   ModelView model;
   float level = 0.5f;
   float beta = 2.0f;
   bool use_sheets = false;
+  // The finest blocks that the level set's distance bound keeps are dropped where the block's
+  // first-order estimate of ŵ (BlockWindingPass's) settles w − w* over all of it: with the exact
+  // method and a cone, where the corners take the same bounds.
+  bool settle_by_bounds = false;
 
-  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi) const {
+  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool finest = false) const {
     const vec3 centre = 0.5f * (lo + hi);
     const float radius = kScoutSlack * 0.5f * glm::length(hi - lo);
     const float surface = unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance;
     if (surface <= radius) return true;
-    return level_set_distance_bound(model, centre, level, beta, radius) <= radius;
+    if (level_set_distance_bound(model, centre, level, beta, radius) > radius) return false;
+    return !(finest && settle_by_bounds && settled_by_bounds({lo, hi}));
+  }
+
+  // No sheet within the block (the caller's distance), and ŵ's range over it holds no w* + n:
+  // w = ŵ − J_M with J_M a whole number, so w ≠ w* off M, and on M S is sheets alone.
+  GWNRT_HD bool settled_by_bounds(const Aabb& block) const {
+    const BlockRayChoice ray = choose_block_ray(model, block);
+    if (!ray.bounds.usable) return false;
+    TaylorPoint p;
+    return taylor_point(model, block.centre(), ray.axis, ray.sign, p) &&
+           !taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level);
   }
 };
 
@@ -189,7 +235,7 @@ struct BlockWindingPass {
     w = BlockWinding{};
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const Aabb block = block_box(b);
-    choose_ray(block, block.centre(), w);
+    choose_ray(block, w);
     return b;
   }
 
@@ -310,30 +356,12 @@ struct BlockWindingPass {
   }
 #endif
 
-  // The six axis directions by how soon the block's centre leaves M's box along them: the first
-  // whose swept box holds no ∂M, with its bounds; else the first.
-  GWNRT_HD void choose_ray(const Aabb& block, const vec3& centre, BlockWinding& w) const {
-    float exit[6];
-    for (int d = 0; d < 6; ++d)
-      exit[d] = d & 1 ? centre[d / 2] - model.bounds.lo[d / 2] : model.bounds.hi[d / 2] - centre[d / 2];
-    int order[6] = {0, 1, 2, 3, 4, 5};
-    for (int i = 1; i < 6; ++i)
-      for (int j = i; j > 0 && exit[order[j]] < exit[order[j - 1]]; --j) {
-        const int t = order[j];
-        order[j] = order[j - 1];
-        order[j - 1] = t;
-      }
-    for (int i = 0; i < 6; ++i) {
-      const int axis = order[i] / 2;
-      const float sign = order[i] & 1 ? -1.0f : 1.0f;
-      const BoxFieldBounds bounds = box_field_bounds(model, block, axis, sign);
-      if (i == 0 || bounds.usable) {
-        w.axis = axis;
-        w.sign = sign;
-        w.bounds[0] = bounds;
-      }
-      if (bounds.usable) return;
-    }
+  // The block's ray (choose_block_ray) and its bounds.
+  GWNRT_HD void choose_ray(const Aabb& block, BlockWinding& w) const {
+    const BlockRayChoice ray = choose_block_ray(model, block);
+    w.axis = ray.axis;
+    w.sign = ray.sign;
+    w.bounds[0] = ray.bounds;
   }
 
   // w − w* at corner `local` (at x) from the finer centre that holds it, or NaN.
