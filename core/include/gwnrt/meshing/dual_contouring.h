@@ -26,6 +26,9 @@ namespace gwnrt {
 // Scouting keeps a block when the bound on the distance from its centre to S is at most its
 // half-diagonal times this (float round-off of the bound's own terms is far below 1e-3).
 inline constexpr float kScoutSlack = 1.001f;
+// The scout levels (0: blocks of kBlockCells³) where the corners' first-order bounds may drop
+// a block too: 8 and 16 cells (at 32 they settled too few to pay for themselves).
+inline constexpr int kScoutBoundLevel = 1;
 
 // Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
 // above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
@@ -66,18 +69,18 @@ struct ScoutQuery {
   float level = 0.5f;
   float beta = 2.0f;
   bool use_sheets = false;
-  // The finest blocks that the level set's distance bound keeps are dropped where the block's
-  // first-order estimate of ŵ (BlockWindingPass's) settles w − w* over all of it: with the exact
-  // method and a cone, where the corners take the same bounds.
+  // Blocks of the finest levels (by_bounds) that the level set's distance bound keeps are
+  // dropped where the block's first-order estimate of ŵ (BlockWindingPass's) settles w − w* over
+  // all of it: with the exact method and a cone, where the corners take the same bounds.
   bool settle_by_bounds = false;
 
-  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool finest = false) const {
+  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool by_bounds = false) const {
     const vec3 centre = 0.5f * (lo + hi);
     const float radius = kScoutSlack * 0.5f * glm::length(hi - lo);
     const float surface = unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance;
     if (surface <= radius) return true;
     if (level_set_distance_bound(model, centre, level, beta, radius) > radius) return false;
-    return !(finest && settle_by_bounds && settled_by_bounds({lo, hi}));
+    return !(by_bounds && settle_by_bounds && settled_by_bounds({lo, hi}));
   }
 
   // No sheet within the block (the caller's distance), and ŵ's range over it holds no w* + n:

@@ -213,7 +213,7 @@ Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& sc
             return false;
           const vec3 lo = grid.corner_position({b.x * size, b.y * size, b.z * size});
           const vec3 hi = grid.corner_position({(b.x + 1) * size, (b.y + 1) * size, (b.z + 1) * size});
-          return scout.may_meet(lo, hi, level == 0);
+          return scout.may_meet(lo, hi, level <= kScoutBoundLevel);
         },
         kept);
     if (Status s = budget.reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
