@@ -144,21 +144,23 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     };
     // The screen's, the refinement's and the centres' betas (the last with ∇w, as the centres
     // take it), each tenfold under what its use allows: the margins of 0.02 and 2e-3 on the
-    // corners (dual_contouring.h) and of 1e-3 on ŵ (kBoxWindingMargin).
-    const float betas[3] = {kCornerScreenBeta, kCornerRefineBeta, kTaylorPointBeta};
-    const float tolerances[3] = {2e-3f, 2e-4f, 1e-4f};
-    float worst[3] = {0.0f, 0.0f, 0.0f};
+    // corners (dual_contouring.h) and of 1e-3 on ŵ (kBoxWindingMargin); and the exact method's
+    // own beta for the corners nearest the level, within twice its 1e-5 of the one-by-one sum.
+    const float betas[4] = {kCornerScreenBeta, kCornerRefineBeta, kTaylorPointBeta, kConeBeta};
+    const float tolerances[4] = {2e-3f, 2e-4f, 1e-4f, 2e-5f};
+    float worst[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     const auto check = [&](const std::vector<vec3>& points, int axis, float sign, const char* where) {
-      for (int pass = 0; pass < 3; ++pass) {
+      for (int pass = 0; pass < 4; ++pass) {
         ConeWindingBatch<512> batch;
         ConeWindingBatch<512, true> with_gradient;
-        for (const vec3& x : points) (pass < 2 ? batch.add(x) : with_gradient.add(x));
-        if (pass < 2)
-          batch.evaluate(view.cone, betas[pass], axis);
-        else
+        const bool gradient = pass == 2;
+        for (const vec3& x : points) (gradient ? with_gradient.add(x) : batch.add(x));
+        if (gradient)
           with_gradient.evaluate(view.cone, betas[pass], axis);
+        else
+          batch.evaluate(view.cone, betas[pass], axis);
         for (int j = 0; j < int(points.size()); ++j) {
-          const float w = batch_w(pass < 2 ? batch.winding(j) : with_gradient.winding(j), points[j], axis, sign);
+          const float w = batch_w(gradient ? with_gradient.winding(j) : batch.winding(j), points[j], axis, sign);
           if (!(w == w)) {
             ++unsure;
             continue;
@@ -219,8 +221,8 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     EXPECT_LT(worst_gradient[0], 1e-2f) << name;
     EXPECT_GT(sure, 10 * unsure) << name;
     EXPECT_GT(worst[0], 0.0f) << name;
-    std::printf("%s: %d sure, %d unsure; largest error %.2e, %.2e, %.2e at betas 2, 3, 5\n", name, sure, unsure,
-                worst[0], worst[1], worst[2]);
+    std::printf("%s: %d sure, %d unsure; largest error %.2e, %.2e, %.2e (with gradient), %.2e at betas 2, 3, 5, 5\n",
+                name, sure, unsure, worst[0], worst[1], worst[2], worst[3]);
   }
 }
 #endif

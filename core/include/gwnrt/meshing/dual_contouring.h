@@ -619,15 +619,35 @@ struct CornerBatchPass {
       for (int j = 0; j < near_count; ++j) batch.add(position(b, near_level[j]));
       batch.evaluate(model.cone, kCornerRefineBeta, ray.axis);
     }
+    uint16_t nearer[kBlockItems];  // those within kCornerRefineMargin: the exact method's beta
+    int nearer_jumps[kBlockItems], nearer_count = 0;
     for (int j = 0; j < near_count; ++j) {
       const uint32_t i = near_level[j];
       const vec3 x = position(b, i);
       is_deferred_corner(out[i], jumps);
       const float refined = refine_in_batch ? batch_winding(batch, j, i, jumps) : __builtin_nanf("");
+      if (refined == refined && fabsf(refined - level) < kCornerRefineMargin) {
+        nearer_jumps[nearer_count] = jumps;
+        nearer[nearer_count++] = uint16_t(i);
+      }
       out[i] =
-          (refined == refined ? exact_corner_winding(model, x, ray.axis, ray.sign, jumps, level, refined)
+          (refined == refined ? refined
                               : refined_corner_winding(model, x, ray.axis, ray.sign, jumps, level, near_value[j])) -
           level;
+    }
+    // As exact_corner_winding, the batch at kConeBeta where it is sure.
+    const bool exact_in_batch = nearer_count >= kMinConeBatch;
+    if (exact_in_batch) {
+      batch.count = 0;
+      for (int j = 0; j < nearer_count; ++j) batch.add(position(b, nearer[j]));
+      batch.evaluate(model.cone, kConeBeta, ray.axis);
+    }
+    for (int j = 0; j < nearer_count; ++j) {
+      const uint32_t i = nearer[j];
+      const float exact = exact_in_batch ? batch_winding(batch, j, i, nearer_jumps[j]) : __builtin_nanf("");
+      out[i] = (exact == exact ? exact
+                               : winding_from_mesh_jumps(model, position(b, i), ray.axis, ray.sign, nearer_jumps[j])) -
+               level;
     }
   }
 #endif
