@@ -64,6 +64,47 @@ GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aa
   return out;
 }
 
+// Below this many points a batch is not worth its traversal of the cone for the points' box
+// (about a few single sums): they are summed one by one.
+inline constexpr int kMinConeBatch = 4;
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// taylor_point at up to 8 points, each along its own ray (axis[k], sign[k]): those that share a
+// ray from one batched traversal of the cone (ŵ = w_C plus the cone's jumps ahead, each from a
+// walk of its own; ∇w = ∇w_C), the others and those the batch is unsure of one by one. ok[k]:
+// taylor_point's result.
+inline void taylor_points(const ModelView& model, const vec3* x, const int* axis, const float* sign, int n,
+                          TaylorPoint* out, bool* ok) {
+  uint32_t pending = n >= 32 ? ~0u : (1u << n) - 1u;
+  while (pending != 0) {  // one batch for each ray among them
+    const int first = lowest_set_bit(pending);
+    ConeWindingBatch<8, true> batch;
+    int in_batch[8];
+    for (uint32_t rest = pending; rest != 0; rest &= rest - 1) {
+      const int k = lowest_set_bit(rest);
+      if (axis[k] != axis[first] || sign[k] != sign[first]) continue;
+      pending &= ~(1u << k);
+      in_batch[batch.count] = k;
+      batch.add(x[k]);
+    }
+    const bool batched = batch.count >= kMinConeBatch;
+    if (batched) batch.evaluate(model.cone, kTaylorPointBeta, axis[first]);
+    for (int j = 0; j < batch.count; ++j) {
+      const int k = in_batch[j];
+      if (batched) {
+        const int a = axis[k];
+        const float u[1] = {x[k][(a + 1) % 3]}, v[1] = {x[k][(a + 2) % 3]}, along[1] = {x[k][a]};
+        int cone_jumps[1][1];
+        jumps_along_axis_lattice(model.cone, u, v, along, a, sign[k], cone_jumps);
+        out[k].w_hat = batch.crossing_winding(j, cone_jumps[0][0], 0);
+        out[k].gradient = batch.winding_gradient(j);
+      }
+      ok[k] = (batched && out[k].finite()) || taylor_point(model, x[k], axis[k], sign[k], out[k]);
+    }
+  }
+}
+#endif
+
 struct ScoutQuery {
   ModelView model;
   float level = 0.5f;
@@ -92,6 +133,37 @@ struct ScoutQuery {
     return taylor_point(model, block.centre(), ray.axis, ray.sign, p) &&
            !taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level);
   }
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  // may_meet(·, ·, true) of up to 8 blocks (siblings, so near each other), their centres' sums
+  // as batches (taylor_points).
+  void may_meet_batch(const Aabb* blocks, int n, bool* out) const {
+    vec3 centre[8];
+    int axis[8], pending[8], count = 0;
+    float sign[8];
+    BoxFieldBounds bounds[8];
+    for (int k = 0; k < n; ++k) {
+      const vec3 c = blocks[k].centre();
+      const float radius = kScoutSlack * 0.5f * glm::length(blocks[k].hi - blocks[k].lo);
+      out[k] = unsigned_distance(use_sheets ? model.sheets : model.triangles, c).distance <= radius;
+      if (out[k] || level_set_distance_bound(model, c, level, beta, radius) > radius) continue;
+      out[k] = true;
+      if (!settle_by_bounds) continue;
+      const BlockRayChoice ray = choose_block_ray(model, blocks[k]);
+      if (!ray.bounds.usable) continue;
+      centre[count] = c;
+      axis[count] = ray.axis;
+      sign[count] = ray.sign;
+      bounds[count] = ray.bounds;
+      pending[count++] = k;
+    }
+    TaylorPoint p[8];
+    bool ok[8];
+    taylor_points(model, centre, axis, sign, count, p, ok);
+    for (int j = 0; j < count; ++j)
+      out[pending[j]] = !(ok[j] && !taylor_may_leave_unsettled(p[j], bounds[j], centre[j], blocks[pending[j]], level));
+  }
+#endif
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -162,10 +234,6 @@ inline constexpr bool kBatchedConeSums = true;
 #else
 inline constexpr bool kBatchedConeSums = false;
 #endif
-
-// Below this many points a batch is not worth its traversal of the cone for the points' box
-// (about a few single sums): they are summed one by one.
-inline constexpr int kMinConeBatch = 4;
 
 // Per slot, with the exact method and a cone (field/box_winding.h): bounds on ∇w and H_w and
 // first-order centres at two scales: the block (8³ corners) and its eighths (4³: their own,
@@ -294,38 +362,25 @@ struct BlockWindingPass {
       member[members] = s;
       member_block[members++] = m;
     }
-    uint32_t pending = 0;  // members whose centre is wanted and not yet summed
+    vec3 centre[8];
+    int axis[8], wanted[8], count = 0;
+    float sign[8];
     for (int i = 0; i < members; ++i) {
       begin(member[i]);
-      if (out[member[i]].bounds[0].usable) pending |= 1u << i;
+      const BlockWinding& w = out[member[i]];
+      if (!w.bounds[0].usable) continue;
+      centre[count] = block_box(member_block[i]).centre();
+      axis[count] = w.axis;
+      sign[count] = w.sign;
+      wanted[count++] = i;
     }
-    while (pending != 0) {  // one batch for each ray among the members
-      const BlockWinding& first = out[member[lowest_set_bit(pending)]];
-      const int axis = first.axis;
-      const float sign = first.sign;
-      ConeWindingBatch<8, true> batch;
-      int in_batch[8];
-      for (uint32_t rest = pending; rest != 0; rest &= rest - 1) {
-        const int i = lowest_set_bit(rest);
-        if (out[member[i]].axis != axis || out[member[i]].sign != sign) continue;
-        pending &= ~(1u << i);
-        in_batch[batch.count] = i;
-        batch.add(block_box(member_block[i]).centre());
-      }
-      if (batch.count >= kMinConeBatch) batch.evaluate(model.cone, kTaylorPointBeta, axis);
-      for (int j = 0; j < batch.count; ++j) {
-        BlockWinding& w = out[member[in_batch[j]]];
-        const vec3 centre = block_box(member_block[in_batch[j]]).centre();
-        TaylorPoint& p = w.point[0];
-        if (batch.count >= kMinConeBatch) {
-          const float u[1] = {centre[(axis + 1) % 3]}, v[1] = {centre[(axis + 2) % 3]}, along[1] = {centre[axis]};
-          int cone_jumps[1][1];
-          jumps_along_axis_lattice(model.cone, u, v, along, axis, sign, cone_jumps);
-          p.w_hat = batch.crossing_winding(j, cone_jumps[0][0], 0);
-          p.gradient = batch.winding_gradient(j);
-        }
-        w.block = (batch.count >= kMinConeBatch && p.finite()) || taylor_point(model, centre, axis, sign, p);
-      }
+    TaylorPoint p[8];
+    bool ok[8];
+    taylor_points(model, centre, axis, sign, count, p, ok);
+    for (int j = 0; j < count; ++j) {
+      BlockWinding& w = out[member[wanted[j]]];
+      w.point[0] = p[j];
+      w.block = ok[j];
     }
     for (int i = 0; i < members; ++i) finish(member[i], member_block[i]);
   }

@@ -205,17 +205,47 @@ Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& sc
   for (int level = level_top;; --level) {
     const int32_t size = kBlockCells << level;
     const GridCoord* c = candidates.data();
-    const uint64_t count = compact(
-        backend, c, candidates.size(),
-        [=] GWNRT_PASS(uint64_t i) {
-          const GridCoord b = c[i];
-          if (!(b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2]))
-            return false;
-          const vec3 lo = grid.corner_position({b.x * size, b.y * size, b.z * size});
-          const vec3 hi = grid.corner_position({(b.x + 1) * size, (b.y + 1) * size, (b.z + 1) * size});
-          return scout.may_meet(lo, hi, level <= kScoutBoundLevel);
-        },
-        kept);
+    const auto inside = [=] GWNRT_PASS(const GridCoord& b) {
+      return b.x * size <= grid.cells[0] && b.y * size <= grid.cells[1] && b.z * size <= grid.cells[2];
+    };
+    const auto box = [=] GWNRT_PASS(const GridCoord& b) {
+      return Aabb{grid.corner_position({b.x * size, b.y * size, b.z * size}),
+                  grid.corner_position({(b.x + 1) * size, (b.y + 1) * size, (b.z + 1) * size})};
+    };
+    uint64_t count = 0;
+#if GWNRT_HOST_LANES && defined(__AVX__)
+    if (level <= kScoutBoundLevel && scout.settle_by_bounds) {
+      // Eight candidates at a time (a kept block's children), their centres' sums as batches.
+      typename Backend::template Array<uint8_t> meets;
+      meets.resize(candidates.size());
+      uint8_t* m = meets.data();
+      const uint64_t n = candidates.size();
+      backend.parallel_for((n + 7) / 8, [=](uint64_t g) {
+        Aabb boxes[8];
+        bool out[8];
+        int count8 = 0;
+        uint64_t index[8];
+        for (uint64_t i = 8 * g; i < n && i < 8 * g + 8; ++i) {
+          m[i] = 0;
+          if (!inside(c[i])) continue;
+          index[count8] = i;
+          boxes[count8++] = box(c[i]);
+        }
+        scout.may_meet_batch(boxes, count8, out);
+        for (int k = 0; k < count8; ++k) m[index[k]] = out[k];
+      });
+      count = compact(
+          backend, c, n, [=](uint64_t i) { return m[i] != 0; }, kept);
+    } else
+#endif
+      count = compact(
+          backend, c, candidates.size(),
+          [=] GWNRT_PASS(uint64_t i) {
+            if (!inside(c[i])) return false;
+            const Aabb b = box(c[i]);
+            return scout.may_meet(b.lo, b.hi, level <= kScoutBoundLevel);
+          },
+          kept);
     if (Status s = budget.reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
     budget.release(count * sizeof(GridCoord) * (level > 0 ? 9 : 1));
     if (level == 0) return Status::Ok();
