@@ -138,9 +138,9 @@ struct ScoutQuery {
   // may_meet(·, ·, true) of up to 8 blocks (siblings, so near each other), their centres' sums
   // as batches (taylor_points).
   void may_meet_batch(const Aabb* blocks, int n, bool* out) const {
-    vec3 centre[8];
-    int axis[8], pending[8], count = 0;
-    float sign[8];
+    vec3 centre[8]{};
+    int axis[8]{}, pending[8]{}, count = 0;
+    float sign[8]{};
     BoxFieldBounds bounds[8];
     for (int k = 0; k < n; ++k) {
       const vec3 c = blocks[k].centre();
@@ -362,9 +362,9 @@ struct BlockWindingPass {
       member[members] = s;
       member_block[members++] = m;
     }
-    vec3 centre[8];
-    int axis[8], wanted[8], count = 0;
-    float sign[8];
+    vec3 centre[8]{};
+    int axis[8]{}, wanted[8]{}, count = 0;
+    float sign[8]{};
     for (int i = 0; i < members; ++i) {
       begin(member[i]);
       const BlockWinding& w = out[member[i]];
