@@ -27,8 +27,7 @@ Status extract_surface(const DeviceModel& device, const GwnModel& model, const M
               "(DeviceModel::upload after the last set_sheet_level)"};
     CudaBackend backend;
     backend.stream = stream;
-    const ScoutQuery scout{view, options.level, options.winding.taylor.beta, plan.use_sheets,
-                           options.settle_corners_by_bounds && detail::sums_cone(view, options)};
+    const ScoutQuery scout{view, options.level, options.winding.taylor.beta, plan.use_sheets, plan.settle_by_bounds};
     if (Status s = run_dual_contouring(backend, view, options, plan.grid, scout, out, st); !s.ok()) {
       out = SurfaceMesh{};
       return s;

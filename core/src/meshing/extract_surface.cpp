@@ -11,8 +11,7 @@ Status extract_unguarded(const GwnModel& model, const MeshingOptions& options, S
   MeshingPlan plan;
   if (Status s = plan_meshing(model, options, plan, out, stats); !s.ok() || plan.empty) return s;
   HostBackend backend;
-  const ScoutQuery scout{plan.view, options.level, options.winding.taylor.beta, plan.use_sheets,
-                         options.settle_corners_by_bounds && detail::sums_cone(plan.view, options)};
+  const ScoutQuery scout{plan.view, options.level, options.winding.taylor.beta, plan.use_sheets, plan.settle_by_bounds};
   if (Status s = run_dual_contouring(backend, plan.view, options, plan.grid, scout, out, stats); !s.ok()) {
     out = SurfaceMesh{};
     return s;

@@ -91,6 +91,7 @@ Status plan_meshing(const GwnModel& model, const MeshingOptions& options, Meshin
   // The sheets bound the distance to S only when classified for this level and exactly (the
   // multipole's classification decides within a tolerance); otherwise the distance to M does.
   plan.use_sheets = plan.view.sheet_level == options.level && model.sheet_side_tolerance() == 0.0f;
+  plan.settle_by_bounds = options.settle_corners_by_bounds && detail::sums_cone(plan.view, options);
   return Status::Ok();
 }
 

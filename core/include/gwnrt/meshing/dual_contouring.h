@@ -30,9 +30,6 @@ inline constexpr float kScoutSlack = 1.001f;
 // a block too: 8 and 16 cells (at 32 they settled too few to pay for themselves).
 inline constexpr int kScoutBoundLevel = 1;
 
-// Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
-// above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
-// another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
 // The ray a block's first-order estimate of ŵ is taken along: the first of the six axis
 // directions, nearest exit of M's box first, whose swept box holds no ∂M (its bounds usable),
 // else the nearest exit's.
@@ -64,18 +61,26 @@ GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aa
   return out;
 }
 
+// The jumps of `tree`'s triangles ahead of x along the ray (axis, sign).
+GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, int axis, float sign) {
+  const float u[1] = {x[(axis + 1) % 3]}, v[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
+  int jumps[1][1];
+  jumps_along_axis_lattice(tree, u, v, along, axis, sign, jumps);
+  return jumps[0][0];
+}
+
 // Below this many points a batch is not worth its traversal of the cone for the points' box
 // (about a few single sums): they are summed one by one.
 inline constexpr int kMinConeBatch = 4;
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
-// taylor_point at up to 8 points, each along its own ray (axis[k], sign[k]): those that share a
+// taylor_point at n <= 8 points, each along its own ray (axis[k], sign[k]): those that share a
 // ray from one batched traversal of the cone (ŵ = w_C plus the cone's jumps ahead, each from a
 // walk of its own; ∇w = ∇w_C), the others and those the batch is unsure of one by one. ok[k]:
 // taylor_point's result.
 inline void taylor_points(const ModelView& model, const vec3* x, const int* axis, const float* sign, int n,
                           TaylorPoint* out, bool* ok) {
-  uint32_t pending = n >= 32 ? ~0u : (1u << n) - 1u;
+  uint32_t pending = (1u << n) - 1u;
   while (pending != 0) {  // one batch for each ray among them
     const int first = lowest_set_bit(pending);
     ConeWindingBatch<8, true> batch;
@@ -92,11 +97,7 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
     for (int j = 0; j < batch.count; ++j) {
       const int k = in_batch[j];
       if (batched) {
-        const int a = axis[k];
-        const float u[1] = {x[k][(a + 1) % 3]}, v[1] = {x[k][(a + 2) % 3]}, along[1] = {x[k][a]};
-        int cone_jumps[1][1];
-        jumps_along_axis_lattice(model.cone, u, v, along, a, sign[k], cone_jumps);
-        out[k].w_hat = batch.crossing_winding(j, cone_jumps[0][0], 0);
+        out[k].w_hat = batch.crossing_winding(j, jumps_ahead(model.cone, x[k], axis[k], sign[k]), 0);
         out[k].gradient = batch.winding_gradient(j);
       }
       ok[k] = (batched && out[k].finite()) || taylor_point(model, x[k], axis[k], sign[k], out[k]);
@@ -105,6 +106,9 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
 }
 #endif
 
+// Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
+// above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
+// another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
 struct ScoutQuery {
   ModelView model;
   float level = 0.5f;
@@ -116,12 +120,21 @@ struct ScoutQuery {
   bool settle_by_bounds = false;
 
   GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool by_bounds = false) const {
-    const vec3 centre = 0.5f * (lo + hi);
-    const float radius = kScoutSlack * 0.5f * glm::length(hi - lo);
-    const float surface = unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance;
-    if (surface <= radius) return true;
-    if (level_set_distance_bound(model, centre, level, beta, radius) > radius) return false;
+    const Nearness n = nearness({lo, hi});
+    if (n != Nearness::kLevelSet) return n == Nearness::kSheet;
     return !(by_bounds && settle_by_bounds && settled_by_bounds({lo, hi}));
+  }
+
+  // The distance tests alone: S farther than the block's half-diagonal, a sheet (or M) within
+  // it, or only the level set's bound keeping it.
+  enum class Nearness { kFar, kSheet, kLevelSet };
+  GWNRT_HD Nearness nearness(const Aabb& block) const {
+    const vec3 centre = block.centre();
+    const float radius = kScoutSlack * 0.5f * glm::length(block.hi - block.lo);
+    if (unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance <= radius)
+      return Nearness::kSheet;
+    return level_set_distance_bound(model, centre, level, beta, radius) <= radius ? Nearness::kLevelSet
+                                                                                  : Nearness::kFar;
   }
 
   // No sheet within the block (the caller's distance), and ŵ's range over it holds no w* + n:
@@ -143,15 +156,12 @@ struct ScoutQuery {
     float sign[8]{};
     BoxFieldBounds bounds[8];
     for (int k = 0; k < n; ++k) {
-      const vec3 c = blocks[k].centre();
-      const float radius = kScoutSlack * 0.5f * glm::length(blocks[k].hi - blocks[k].lo);
-      out[k] = unsigned_distance(use_sheets ? model.sheets : model.triangles, c).distance <= radius;
-      if (out[k] || level_set_distance_bound(model, c, level, beta, radius) > radius) continue;
-      out[k] = true;
-      if (!settle_by_bounds) continue;
+      const Nearness near = nearness(blocks[k]);
+      out[k] = near != Nearness::kFar;
+      if (near != Nearness::kLevelSet || !settle_by_bounds) continue;
       const BlockRayChoice ray = choose_block_ray(model, blocks[k]);
       if (!ray.bounds.usable) continue;
-      centre[count] = c;
+      centre[count] = blocks[k].centre();
       axis[count] = ray.axis;
       sign[count] = ray.sign;
       bounds[count] = ray.bounds;
@@ -814,14 +824,6 @@ GWNRT_HD inline void slot_edges(const uint64_t* edges, uint64_t edge_count, uint
   while (end < edge_count && edges[end] < end_key) ++end;
 }
 
-// The jumps of `tree`'s triangles ahead of x along the ray.
-GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, const CornerRay& ray) {
-  const float u[1] = {x[(ray.axis + 1) % 3]}, v[1] = {x[(ray.axis + 2) % 3]}, along[1] = {x[ray.axis]};
-  int jumps[1][1];
-  jumps_along_axis_lattice(tree, u, v, along, ray.axis, ray.sign, jumps);
-  return jumps[0][0];
-}
-
 // w − w* at x by crossings at kRootSearchConeBeta: what an edge's walk and root search take
 // where a batch has no value.
 GWNRT_HD inline float root_search_value(const ModelView& m, const vec3& x, float level) {
@@ -869,10 +871,10 @@ struct WalkBatchPass {
           const vec3 x = hermite[index[j]].point;
           const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
           values[j].value[values[j].count++] =
-              w_cone == w_cone
-                  ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray), jumps_ahead(model.triangles, x, ray)) -
-                        walks.level
-                  : root_search_value(model, x, walks.level);
+              w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray.axis, ray.sign),
+                                                        jumps_ahead(model.triangles, x, ray.axis, ray.sign)) -
+                                     walks.level
+                               : root_search_value(model, x, walks.level);
           hermite[index[j]] = walks.walk(index[j], &values[j]);
         }
       }
@@ -940,10 +942,11 @@ struct RootBatchPass {
           const vec3& x = point[a];
           // The jumps' walks only where the batch has a value.
           const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
-          bracket[active[a]].take(w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray),
-                                                                            jumps_ahead(model.triangles, x, ray)) -
-                                                         level
-                                                   : root_search_value(model, x, level));
+          bracket[active[a]].take(w_cone == w_cone
+                                      ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray.axis, ray.sign),
+                                                               jumps_ahead(model.triangles, x, ray.axis, ray.sign)) -
+                                            level
+                                      : root_search_value(model, x, level));
         }
       }
       for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);

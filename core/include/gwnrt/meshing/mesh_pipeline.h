@@ -102,7 +102,8 @@ uint64_t compact(Backend& backend, const T* in, uint64_t n, Keep keep, Out& out)
 struct MeshingPlan {
   ModelView view;  // the host's
   MeshGrid grid;
-  bool use_sheets = false;  // the scout's distance to S: to the sheets (exact classification) or to M
+  bool use_sheets = false;        // the scout's distance to S: to the sheets (exact classification) or to M
+  bool settle_by_bounds = false;  // the scout drops blocks by the corners' bounds too (ScoutQuery)
   bool empty = false;
 };
 Status plan_meshing(const GwnModel& model, const MeshingOptions& options, MeshingPlan& plan, SurfaceMesh& out,
