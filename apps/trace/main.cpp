@@ -157,7 +157,9 @@ int main(int argc, char** argv) {
   load_options.recentre = true;
   load_options.weld_tolerance = weld_tolerance;
   load_options.summarize_weld = verbose;
-  if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
+  gwnrt::BuildOptions build_options;
+  build_options.sheet_level = options.level;  // and so the tracer's level-free cells
+  if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, build_options, load_options); !s.ok())
     return fail(kProgram, s.message());
   const gwnrt::dvec3 origin = loaded.report.origin;
   if (origin != gwnrt::dvec3(0.0)) {

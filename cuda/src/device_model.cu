@@ -38,7 +38,7 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
     std::string why;
     if (!device_available(&why)) return {StatusCode::kUnavailable, why};
     // Every part the model may be asked: the device's copy is not built on first need.
-    if (Status s = model.prepare(kPartBoundary | kPartSheets); !s.ok()) return s;
+    if (Status s = model.prepare(kPartBoundary | kPartSheets | kPartLevelFreeCells); !s.ok()) return s;
     auto b = std::make_unique<Buffers>();
     // Same views as on the host (counts, bounds), with device pointers in place of host ones.
     ModelView v = model.view();
@@ -52,9 +52,11 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
                      b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
                      b->segment_lengths.upload(st.lengths), b->endpoints.upload(st.endpoints),
                      b->segment_ids.upload(st.segment_ids),
-                     b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size())})
+                     b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size()),
+                     b->level_free.upload(model.level_free_cells().free.data(), model.level_free_cells().free.size())})
       if (!s.ok()) return s;
     v.smooth_regions = b->smooth_regions.get();
+    v.level_free.free = v.level_free.free ? b->level_free.get() : nullptr;
     v.cone_boundary_lengths = b->cone_lengths.get();
     v.cone_segments = b->cone_segments.get();
     v.boundary.bvh.nodes = b->segment_nodes.get();

@@ -62,6 +62,7 @@ struct DeviceModel::Buffers {
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
   DeviceBuffer<SmoothRegion> smooth_regions;
+  DeviceBuffer<uint8_t> level_free;  // LevelFreeCells::free
   ModelView view;
   std::mutex scratch_mutex;  // one batch at a time uses the scratch
   DeviceScratch inputs, results;

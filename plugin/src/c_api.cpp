@@ -54,6 +54,12 @@ GWNRTMesh build(Mesh mesh, const std::string& source, const std::string& note = 
     set_error(source + ": " + s.message() + note);
     return nullptr;
   }
+  // The tracer's level-free cells for w* = 1/2 (BuildOptions' level): a geometry traced at
+  // another phase goes without them.
+  if (Status s = out->model.prepare(kPartLevelFreeCells); !s.ok()) {
+    set_error(source + ": " + s.message() + note);
+    return nullptr;
+  }
   out->view = out->model.view();
   return out.release();
 }

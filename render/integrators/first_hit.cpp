@@ -160,6 +160,10 @@ int run_first_hit_job(const FirstHitJob& job, const std::string& description) {
   if (Status s = apps::load_model(job.mesh, model, loaded, {}, MeshLoadOptions{.recentre = true}); !s.ok())
     return apps::fail(kProgram, s.message());
   apps::print_load_warnings(kProgram, job.mesh, loaded.report, false);
+  // The tracer's level-free cells are made for the level the model's sheets are classified at.
+  if (!(model.requested_sheet_level() == trace.level))
+    if (Status s = model.set_sheet_level(trace.level); !s.ok()) return apps::fail(kProgram, s.message());
+  if (Status s = model.prepare(kPartLevelFreeCells); !s.ok()) return apps::fail(kProgram, s.message());
   apps::warn_if_level_out_of_reach(kProgram, model.view(), trace);
   const size_t boundary_segments = model.boundary().segment_count();
   std::printf("%s: %s: %zu triangles, %zu boundary segments%s; loaded in %.3f s, built in %.3f s\n", kProgram,

@@ -117,7 +117,11 @@ TEST_F(TraceCliTest, FarOffMeshTracesAsTheSameMeshAtTheOrigin) {
       continue;
     }
     if (r[0] == "0") {
-      EXPECT_EQ(s, r) << "ray " << i;
+      // All but the steps: the rounding moves the faces of the tracer's level-free cells too, and
+      // with them where a run of them ends and the Harnack steps resume.
+      std::vector<std::string> r_answer = r, s_answer = s;
+      r_answer[10] = s_answer[10] = "";
+      EXPECT_EQ(s_answer, r_answer) << "ray " << i;
       continue;
     }
     ++hits;

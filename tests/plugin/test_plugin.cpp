@@ -205,6 +205,8 @@ TEST(EmbreePlugin, OpenMeshMatchesTraceSurface) {
   const Mesh mesh = load_test_mesh("bunny_holes.obj");
   const GwnModel model = build_model(mesh);
   ASSERT_GT(model.boundary().segment_count(), 0u) << "the mesh must have holes";
+  // With the level-free cells the plugin's meshes have (for w* = 1/2): the same computation.
+  ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());
   const ModelView view = model.view();
   const TraceOptions options{};
   Device device;
@@ -284,6 +286,7 @@ TEST(EmbreePlugin, OpenMeshMatchesTraceSurface) {
 TEST(EmbreePlugin, OptionsReachTheTracer) {
   const Mesh mesh = load_test_mesh("bunny_holes.obj");
   const GwnModel model = build_model(mesh);
+  ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());  // as the plugin's mesh has them
   const std::vector<Ray> rays = hole_rays(model, 20);
   Device device;
   struct Case {
@@ -426,6 +429,7 @@ std::vector<Ray> soup_rays(size_t count, uint32_t seed) {
 TEST(EmbreePlugin, BoundsHoldSurfaceFarOutsideTheBox) {
   const Mesh soup = stacked_soup(12);
   const GwnModel model = build_model(soup);
+  ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());  // as the plugin's mesh has them
   const ModelView view = model.view();
   const Aabb box = model.bounds();
   const double diag = diagonal(box);

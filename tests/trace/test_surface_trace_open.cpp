@@ -93,13 +93,15 @@ double level_gap(double w, double level, ReferenceMode mode) {
 // At agreeing smooth hits the normal must be -∇w/|∇w| (exact gradient at the tracer's point)
 // within tol.normal_angle; at sheet hits it must point from {w > level} to {w < level} (exact w
 // a little way either side) and the named triangle must carry the point.
+// With level_free_cells the model's view keeps its level-free cells (where prepared), else drops them.
 Comparison compare_with_reference(const GwnModel& model, const ReferenceMesh& ref, const std::vector<Ray>& rays,
                                   const std::vector<RayReference>& samples, const TraceOptions& options,
-                                  const Tolerance& tol) {
+                                  const Tolerance& tol, bool level_free_cells = false) {
   const ReferenceMode mode =
       options.mode == TraceMode::kSolidAngle ? ReferenceMode::kSolidAngle : ReferenceMode::kWindingNumber;
   const double level = options.level;
-  const ModelView view = model.view();
+  ModelView view = model.view();
+  if (!level_free_cells) view.level_free = {};
   const double diag = box_diagonal(model.bounds());
   const double eps = double(options.epsilon) * diag;
   const double t_round = 1e-5 * diag;
@@ -273,19 +275,31 @@ void expect_meaningful(const Comparison& c, size_t min_smooth, size_t min_sheet)
 
 class TraceOpenMesh : public ::testing::TestWithParam<OpenCase> {};
 
+// The number of level-free cells of a prepared model's view.
+size_t level_free_count(const GwnModel& model) {
+  size_t n = 0;
+  for (const uint8_t f : model.level_free_cells().free) n += f;
+  return n;
+}
+
 TEST_P(TraceOpenMesh, MatchesDenseSamplingReference) {
   const GwnModel model = build_model(open_mesh(GetParam().name));
   ASSERT_GT(model.boundary().segment_count(), 0u);
+  ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());
+  ASSERT_GT(level_free_count(model), 0u);
   const ReferenceMesh ref = reference::reference_mesh(model.mesh());
   const std::vector<Ray> rays = open_rays(model, GetParam().rays, 201);
   const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
-  for (const bool exact : {true, false}) {
-    SCOPED_TRACE(exact ? "exact" : "multipole");
+  // The exact march never takes the cells (it is their reference); the multipole's with and without.
+  for (const int variant : {0, 1, 2}) {
+    const bool exact = variant == 0, cells = variant == 2;
+    const char* name = exact ? "exact" : (cells ? "multipole, level-free cells" : "multipole");
+    SCOPED_TRACE(name);
     TraceOptions options;
     options.exact = exact;
-    const Comparison c =
-        compare_with_reference(model, ref, rays, samples, options, exact ? kExactTolerance : kMultipoleTolerance);
-    std::printf("[ %s %s ] %s\n", GetParam().name, exact ? "exact" : "multipole", c.report().c_str());
+    const Comparison c = compare_with_reference(model, ref, rays, samples, options,
+                                                exact ? kExactTolerance : kMultipoleTolerance, cells);
+    std::printf("[ %s %s ] %s\n", GetParam().name, name, c.report().c_str());
     expect_meaningful(c, rays.size() / 20, rays.size() / 20);
   }
 }
@@ -463,20 +477,26 @@ TEST(TraceSolidAngle, NonplanarQuadMatchesDenseSamplingReference) {
 class TraceLevel : public ::testing::TestWithParam<OpenCase> {};
 
 TEST_P(TraceLevel, MatchesDenseSamplingReference) {
-  const GwnModel model = build_model(open_mesh(GetParam().name));
+  GwnModel model = build_model(open_mesh(GetParam().name));
+  ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());
   const ReferenceMesh ref = reference::reference_mesh(model.mesh());
   const std::vector<Ray> rays = open_rays(model, GetParam().rays, 401);
   const std::vector<RayReference> samples = sample_rays(ref, rays, reference_box(model));
   for (const float level : {0.3f, 0.7f}) {
-    for (const bool exact : {true, false}) {
-      SCOPED_TRACE("level " + std::to_string(level) + (exact ? " exact" : " multipole"));
+    // The cells built for 1/2 are made again for this level's phase.
+    ASSERT_TRUE(model.set_sheet_level(level).ok());
+    ASSERT_EQ(model.view().level_free.phase, level);
+    ASSERT_GT(level_free_count(model), 0u);
+    for (const int variant : {0, 1, 2}) {
+      const bool exact = variant == 0, cells = variant == 2;
+      const char* name = exact ? "exact" : (cells ? "multipole, level-free cells" : "multipole");
+      SCOPED_TRACE("level " + std::to_string(level) + " " + name);
       TraceOptions options;
       options.level = level;
       options.exact = exact;
-      const Comparison c =
-          compare_with_reference(model, ref, rays, samples, options, exact ? kExactTolerance : kMultipoleTolerance);
-      std::printf("[ %s level %.1f %s ] %s\n", GetParam().name, level, exact ? "exact" : "multipole",
-                  c.report().c_str());
+      const Comparison c = compare_with_reference(model, ref, rays, samples, options,
+                                                  exact ? kExactTolerance : kMultipoleTolerance, cells);
+      std::printf("[ %s level %.1f %s ] %s\n", GetParam().name, level, name, c.report().c_str());
       expect_meaningful(c, rays.size() / 20, rays.size() / 20);
     }
   }

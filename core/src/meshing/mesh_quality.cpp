@@ -524,7 +524,8 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   QueryRequest request;
   request.fields = kFieldSignedDistance;
   request.level = options.level;
-  if (Status s = model.prepare(parts_read_by(request)); !s.ok()) return s;
+  // With the tracer's level-free cells for S's sample.
+  if (Status s = model.prepare(parts_read_by(request) | kPartLevelFreeCells); !s.ok()) return s;
   const ModelView view = model.view();
   if (Status s = validate_request(request, &view); !s.ok()) return s;
   TraceOptions trace;

@@ -149,11 +149,28 @@ Status GwnModel::prepare(uint32_t parts) const {
     if (parts & (kPartBoundary | kPartSheets)) {
       if (Status s = build_boundary(); !s.ok()) return s;
     }
+    if (parts & kPartLevelFreeCells) {
+      if (Status s = build_boundary(); !s.ok()) return s;
+      if (Status s = build_level_free_cells_locked(); !s.ok()) return s;
+    }
     if ((parts & kPartSheets) && !(deferral_->built.load(std::memory_order_relaxed) & kPartSheets) &&
         deferral_->options.classify_sheets)
       return set_sheet_level_locked(deferral_->options.sheet_level);
     return Status::Ok();
   });
+}
+
+Status GwnModel::build_level_free_cells_locked() const {
+  const float level = deferral_->options.sheet_level;
+  const uint32_t built = deferral_->built.load(std::memory_order_relaxed);
+  if ((built & kPartLevelFreeCells) && level_free_.params.phase == level - std::floor(level)) return Status::Ok();
+  const auto t0 = std::chrono::steady_clock::now();
+  LevelFreeCellGrid cells;  // into a local first: the view keeps the old cells until it is whole
+  if (Status s = build_level_free_cells(view(), level, cells); !s.ok()) return s;
+  level_free_ = std::move(cells);
+  timings_.level_free_seconds = seconds_since(t0);
+  deferral_->built.fetch_or(kPartLevelFreeCells, std::memory_order_release);
+  return Status::Ok();
 }
 
 Status GwnModel::build_boundary() const {
@@ -187,6 +204,9 @@ Status GwnModel::set_sheet_level(float level) {
     // Kept for every later prepare and for requested_sheet_level (prepare only reads the options).
     deferral_->options.sheet_level = level;
     deferral_->options.classify_sheets = true;
+    // Cells already built are proven for the old level's phase: again for the new one.
+    if (deferral_->built.load(std::memory_order_relaxed) & kPartLevelFreeCells)
+      if (Status s = build_level_free_cells_locked(); !s.ok()) return s;
     return Status::Ok();
   });
 }
@@ -296,6 +316,7 @@ ModelView GwnModel::view() const {
     v.sheets = sheets_.view();
     v.sheet_level = sheet_level_;
   }
+  if (built & kPartLevelFreeCells) v.level_free = level_free_.view();
   return v;
 }
 

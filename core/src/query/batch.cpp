@@ -148,7 +148,7 @@ Status trace_rays(const GwnModel& model, std::span<const Ray> rays, const TraceO
       "trace_rays", rays, 64, progress,
       [&] {
         if (Status s = validate_trace_options(options); !s.ok()) return s;
-        if (Status s = model.prepare(kPartBoundary); !s.ok()) return s;
+        if (Status s = model.prepare(kPartBoundary | kPartLevelFreeCells); !s.ok()) return s;
         view = model.view();
         return validate_trace_view(view);
       },

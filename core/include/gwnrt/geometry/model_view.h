@@ -27,6 +27,18 @@ struct ConeSegment {
 
 inline constexpr uint32_t kMaxSmoothRegions = 16;  // loops are grouped beyond this
 
+// Cells of a uniform grid that no level of φ = w mod 1 at `phase` meets (phase w* mod 1: the
+// levels w* + k for every whole k), each proven so when built (sdf/level_free_cells.h): the
+// tracer crosses a run of them in one step instead of Harnack steps sized by the distance to ∂M.
+// Empty (no cells) when not built or useless (a closed mesh has no levels off M).
+struct LevelFreeCells {
+  Aabb box;  // the grid's box: cell (i, j, k) spans box.lo + cell · [i, i + 1] × ...
+  float cell = 0;
+  uint32_t dims[3] = {0, 0, 0};
+  float phase = __builtin_nanf("");  // in [0, 1); NaN when empty
+  const uint8_t* free = nullptr;     // per cell, i + dims[0] · (j + dims[1] · k): 1 where no level meets it
+};
+
 // The parts of a GwnModel, built by GwnModel::build at once or, with BuildOptions::defer_parts,
 // on first need (GwnModel::prepare). A ModelView says which it holds: the others are empty views,
 // which the queries would read as a closed mesh without sheets, so the drivers check.
@@ -34,6 +46,9 @@ enum ModelPart : uint32_t {
   kPartTriangles = 1u << 0,  // M's multipole tree, its box and margin: always built
   kPartBoundary = 1u << 1,   // ∂M and its tree, the cone C over ∂M and its tree, the smooth regions
   kPartSheets = 1u << 2,     // the sheet classification and the sheet tree (reads the boundary's)
+  // The level-free cells for the sheet level's phase (reads the boundary): only on request, never
+  // by build() alone, since only the tracer reads them.
+  kPartLevelFreeCells = 1u << 3,
 };
 
 struct ModelView {
@@ -59,7 +74,8 @@ struct ModelView {
   float crossing_work_ratio = 0;
   Aabb bounds;               // of M
   float surface_margin = 0;  // S lies inside `bounds` grown by this: |w| < 1/2 beyond (docs/design.md §5)
-  uint32_t parts = 0;        // ModelPart bits: what the view holds
+  LevelFreeCells level_free;
+  uint32_t parts = 0;  // ModelPart bits: what the view holds
 };
 
 // Whether w can reach `level` anywhere: w sums one solid angle in (-2π, 2π) over 4π per triangle,

@@ -16,6 +16,7 @@
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/segment_tree.h"
 #include "gwnrt/geometry/triangle_tree.h"
+#include "gwnrt/sdf/level_free_cells.h"
 #include "gwnrt/sdf/sheets.h"
 
 namespace gwnrt {
@@ -48,9 +49,10 @@ struct BuildOptions {
 };
 
 struct BuildTimings {
-  double tree_seconds = 0;      // triangle BVH + moments, M's box and margin
-  double boundary_seconds = 0;  // ∂M extraction + its tree + the cone (0 until built)
-  double sheet_seconds = 0;     // w of the other triangles at every centroid + the sheet tree (0 until built)
+  double tree_seconds = 0;        // triangle BVH + moments, M's box and margin
+  double boundary_seconds = 0;    // ∂M extraction + its tree + the cone (0 until built)
+  double sheet_seconds = 0;       // w of the other triangles at every centroid + the sheet tree (0 until built)
+  double level_free_seconds = 0;  // the level-free cells (0 until asked for: prepare(kPartLevelFreeCells))
 };
 
 class GwnModel {
@@ -96,6 +98,9 @@ class GwnModel {
   WindingMethod sheet_method() const { return sheet_method_; }
   float sheet_side_tolerance() const { return sheet_method_ == WindingMethod::kCrossing ? 0.0f : kSheetSideTolerance; }
   const TriangleTree& sheet_tree() const { return sheets_; }  // for distances: no moments
+  // The tracer's level-free cells, for requested_sheet_level() (0.5 without sheets); empty
+  // until prepare(kPartLevelFreeCells).
+  const LevelFreeCellGrid& level_free_cells() const { return level_free_; }
   float sheet_level() const { return sheet_level_; }
   // The level the sheets are classified for, or will be on first need (a model built with
   // defer_parts, whose sheet_level() is NaN until then): BuildOptions::sheet_level, or the last
@@ -118,6 +123,8 @@ class GwnModel {
   // Under deferral_->mutex: the boundary part (nothing when built), then a classification.
   Status build_boundary() const;
   Status set_sheet_level_locked(float level) const;
+  // Under deferral_->mutex, with the boundary built: the level-free cells for options.sheet_level.
+  Status build_level_free_cells_locked() const;
 
   Mesh mesh_;
   TriangleTree triangles_;
@@ -138,6 +145,7 @@ class GwnModel {
   mutable std::vector<uint8_t> other_winding_refined_;  // per input triangle: evaluated at the fine beta
   mutable TriangleTree sheets_;
   mutable float sheet_level_ = __builtin_nanf("");
+  mutable LevelFreeCellGrid level_free_;
   mutable WindingMethod sheet_method_ = WindingMethod::kAuto;  // resolved at the first classification
   mutable BuildTimings timings_;
 };

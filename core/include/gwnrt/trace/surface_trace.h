@@ -18,6 +18,7 @@
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/ray.h"
 #include "gwnrt/trace/harnack.h"
+#include "gwnrt/trace/level_free_cells.h"
 #include "gwnrt/trace/march_regions.h"
 #include "gwnrt/trace/phase.h"
 #include "gwnrt/trace/trace_types.h"
@@ -75,6 +76,8 @@ class SurfaceTracer {
     // No sheet and no smooth piece of w is at a level w never reaches (model_view.h); the
     // band's integer arithmetic below then also stays within an int.
     if (sheets_ && !level_within_reach(m, o.level)) sheets_ = smooth_ = false;
+    // Not for the exact march: it is the reference the cells' proofs are tested against.
+    free_cells_ = !o.exact && level_free_cells_apply(m.level_free, phase_);
   }
 
   GWNRT_HD RayHit run() {
@@ -356,15 +359,18 @@ class SurfaceTracer {
         }
       }
       if (t >= t_end) return false;
-      const float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
+      float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
+      // Across the level-free cells ahead at once where they reach farther: as safe a step.
+      const float cells = free_cells_ ? level_free_run(m_.level_free, s.x, dir_) : 0.0f;
+      if (cells > safe) safe = cells;
       if (t + safe >= t_end) return false;
       mem.t_prev = t;
       mem.rho_prev = safe;
       mem.have_prev = true;
-      mem.certified = rho >= 0.5f * eps_;  // a safe step (over-stepping keeps it safe or goes back)
+      mem.certified = rho >= 0.5f * eps_ || cells >= safe;  // a safe step (over-stepping keeps it safe or goes back)
       mem.phi_prev = s.phi;
       mem.below_prev = s.levels.below;
-      if (o_.overstep) {
+      if (o_.overstep && !(cells >= safe)) {
         t = min_of(t + kOverstepFactor * safe, t_end);
         mem.overstepped = true;
       } else {
@@ -381,7 +387,7 @@ class SurfaceTracer {
   vec3 dir_{0.0f};
   float len_ = 1.0f, t_near_ = 0.0f, t_far_ = 0.0f, t_end_ = 0.0f, eps_ = 0.0f, phase_ = 0.5f;
   double t_shift_ = 0.0;  // where the ray's own origin lies, in t from the one traced from
-  bool sheets_ = false, smooth_ = false;
+  bool sheets_ = false, smooth_ = false, free_cells_ = false;
   int band_ = 0;  // floor(w - w*) just after the last event
   bool have_next_ = false;
   CrossingHit next_;
