@@ -221,8 +221,9 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     EXPECT_LT(worst_gradient[0], 1e-2f) << name;
     EXPECT_GT(sure, 10 * unsure) << name;
     EXPECT_GT(worst[0], 0.0f) << name;
-    std::printf("%s: %d sure, %d unsure; largest error %.2e, %.2e, %.2e (with gradient), %.2e at betas 2, 3, 5, 5\n",
-                name, sure, unsure, worst[0], worst[1], worst[2], worst[3]);
+    std::printf(
+        "%s: %d sure, %d unsure; largest error %.2e, %.2e, %.2e (with gradient), %.2e at betas %g, %g, %g, %g\n", name,
+        sure, unsure, worst[0], worst[1], worst[2], worst[3], betas[0], betas[1], betas[2], betas[3]);
   }
 }
 #endif

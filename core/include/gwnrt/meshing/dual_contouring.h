@@ -191,12 +191,13 @@ GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local)
 // The corners need w exactly only where its sign is in doubt: a column is first evaluated with
 // the cone's clusters expanded beyond kCornerScreenBeta radii, the corners within
 // kCornerScreenMargin of the level again beyond kCornerRefineBeta, and only those within
-// kCornerRefineMargin of it at the crossing method's own beta. The expansion's error is about
-// 1e-3 at beta 2 (docs/design.md §2) and within 1e-4 at 3 (edge_hermite.h); each margin is ten
-// times or more its error, so off them the sign, which is all the mesh's topology reads, is the
-// exact one. On a scan most corners in doubt are by its rim, where w at beta 5 costs three times
-// w at 3 (docs/performance.md).
-inline constexpr float kCornerScreenBeta = 2.0f;
+// kCornerRefineMargin of it at the crossing method's own beta. The screen's error stayed below
+// 1.7e-3 at beta 1.5 on every real and bundled open mesh at 256³ (the scan's rims; 5.2e-4 at 2),
+// the refinement's within 1e-4 at 3 (edge_hermite.h): each margin is ten times or more its error,
+// so off them the sign, which is all the mesh's topology reads, is the exact one. On a scan most
+// corners in doubt are by its rim, where w at beta 5 costs three times w at 3 and the screen at
+// 1.5 a fifth less than at 2 (docs/performance.md).
+inline constexpr float kCornerScreenBeta = 1.5f;
 inline constexpr float kCornerScreenMargin = 2e-2f;
 inline constexpr float kCornerRefineBeta = kRootSearchConeBeta;
 inline constexpr float kCornerRefineMargin = 2e-3f;
