@@ -733,9 +733,9 @@ struct EdgeCountPass {
     const float f = view.corner_value[item];
     uint32_t mask = 0;
     if (f == f) {
-      const GridCoord c = view.coord_of_item(item);
+      const GridCoord local = local_coord(uint32_t(item % kBlockItems));
       for (int a = 0; a < 3; ++a) {
-        const float g = view.next_corner_value(item, c, a);
+        const float g = view.next_corner_value(item, local, a);
         if (g == g && is_inside(f) != is_inside(g)) mask |= 1u << a;
       }
     }

@@ -94,13 +94,13 @@ struct SparseGridView {
   }
   GWNRT_HD bool slot_active(uint32_t slot) const { return needed_from[slot] & 1u; }
 
-  // The value at the corner one step along `axis` from corner `item` (at c): in the same slot
-  // unless c is on the block's last layer along that axis.
-  GWNRT_HD float next_corner_value(uint64_t item, const GridCoord& c, int axis) const {
-    const int32_t local = c[axis] % kBlockCells;
-    if (local + 1 < kBlockCells)
+  // The value at the corner one step along `axis` from corner `item`, whose coordinate in its
+  // block is `local` (local_coord): in the same slot unless the corner is on the block's last
+  // layer along that axis; only then is the grid coordinate found, through the block map.
+  GWNRT_HD float next_corner_value(uint64_t item, const GridCoord& local, int axis) const {
+    if (local[axis] + 1 < kBlockCells)
       return corner_value[item + (axis == 0 ? 1 : (axis == 1 ? kBlockCells : kBlockCells * kBlockCells))];
-    GridCoord n = c;
+    GridCoord n = coord_of_item(item);
     ++n[axis];
     return corner_value_at(n);
   }
