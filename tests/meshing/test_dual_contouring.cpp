@@ -219,6 +219,34 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     std::printf("%s: gradient's largest relative error %.2e batched, %.2e one by one\n", name, worst_gradient[0],
                 worst_gradient[1]);
     EXPECT_LT(worst_gradient[0], 1e-2f) << name;
+    // The eighths' centres (kEighthPointBeta, eight by the rims as a block's eighths are): the
+    // errors of ŵ and of ∇w times an eighth's half-diagonal at 256³, against beta 24, tenfold under
+    // the estimates' margin (kBoxWindingMargin).
+    float worst_eighth = 0.0f;
+    for (int block = 0; block < 40; ++block) {
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      const float h = diagonal / 256.0f;
+      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
+      ConeWindingBatch<8, true> eighths, reference;
+      for (int k = 0; k < 8; ++k) {
+        const vec3 x = origin + h * (vec3(float(k & 1), float((k >> 1) & 1), float(k >> 2)) * 4.0f - vec3(2.0f)) +
+                       random.uniform(0.0f, h) * random.unit();
+        eighths.add(x);
+        reference.add(x);
+      }
+      eighths.evaluate(view.cone, kEighthPointBeta, -1);
+      reference.evaluate(view.cone, 24.0f, -1);
+      const float reach = 2.0f * std::sqrt(3.0f) * h;
+      for (int j = 0; j < 8; ++j) {
+        const float e = glm::length(eighths.winding_gradient(j) - reference.winding_gradient(j)) * reach +
+                        std::fabs(eighths.winding(j) - reference.winding(j));
+        if (e == e) worst_eighth = std::max(worst_eighth, e);
+      }
+    }
+    std::printf("%s: the eighths' centres at beta %g: largest error times reach %.2e\n", name, kEighthPointBeta,
+                worst_eighth);
+    EXPECT_LT(worst_eighth, 0.1f * kBoxWindingMargin) << name;
+    EXPECT_GT(worst_eighth, 0.0f) << name;
     EXPECT_GT(sure, 10 * unsure) << name;
     EXPECT_GT(worst[0], 0.0f) << name;
     std::printf(

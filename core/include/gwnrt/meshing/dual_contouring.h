@@ -343,7 +343,8 @@ struct BlockWindingPass {
 #endif
     for (; wanted != 0; wanted &= wanted - 1) {
       const int i = lowest_set_bit(wanted);
-      if (taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, w.point[1 + i])) w.mid |= 1u << i;
+      if (taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, w.point[1 + i], kEighthPointBeta))
+        w.mid |= 1u << i;
     }
   }
 
@@ -412,7 +413,7 @@ struct BlockWindingPass {
       eighth[batch.count] = lowest_set_bit(rest);
       batch.add(eighth_box(b, eighth[batch.count]).centre());
     }
-    batch.evaluate(model.cone, kTaylorPointBeta, w.axis);
+    batch.evaluate(model.cone, kEighthPointBeta, w.axis);
     for (int j = 0; j < batch.count; ++j) {
       const int i = eighth[j];
       const int l[3] = {i & 1, (i >> 1) & 1, i >> 2};
@@ -420,7 +421,8 @@ struct BlockWindingPass {
       TaylorPoint& p = w.point[1 + i];
       p.w_hat = batch.crossing_winding(j, cone_jumps[l[u] + 2 * l[v]][k], 0);
       p.gradient = batch.winding_gradient(j);
-      if (p.finite() || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p)) w.mid |= 1u << i;
+      if (p.finite() || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p, kEighthPointBeta))
+        w.mid |= 1u << i;
     }
   }
 #endif
