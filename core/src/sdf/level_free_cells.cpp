@@ -61,8 +61,7 @@ Status build_level_free_cells(const ModelView& model, float level, LevelFreeCell
   out = LevelFreeCellGrid{};
   if (!std::isfinite(level)) return {StatusCode::kInvalidArgument, "build_level_free_cells: level is not finite"};
   if (!(model.parts & kPartBoundary) || model.cone.triangle_count == 0) return Status::Ok();
-  Aabb box;
-  for (uint32_t r = 0; r < march_box_count(model, level); ++r) box.extend(march_box(model, level, r));
+  const Aabb box = march_region(model, level);
   if (!box.valid()) return Status::Ok();
   const vec3 extent = box.hi - box.lo;
   const float longest = std::max({extent.x, extent.y, extent.z});

@@ -26,8 +26,8 @@ namespace detail {
 // The cell-size-independent part of the grid: the box that holds S (M's padded box for the
 // sheets, the march boxes for the smooth pieces of this level).
 inline Aabb surface_box(const ModelView& m, float level) {
-  Aabb box = crossing_box(m);
-  for (uint32_t r = 0; r < march_box_count(m, level); ++r) box.extend(march_box(m, level, r));
+  Aabb box = march_region(m, level);
+  box.extend(crossing_box(m));
   return box;
 }
 

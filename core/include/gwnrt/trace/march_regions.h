@@ -70,12 +70,19 @@ GWNRT_HD inline Aabb march_box(const ModelView& m, float level, uint32_t r) {
   return box;
 }
 
+// The union of the march boxes for level w*: every smooth piece of S. Empty (not valid()) when
+// there are none (a closed mesh).
+GWNRT_HD inline Aabb march_region(const ModelView& m, float level) {
+  Aabb box;
+  for (uint32_t r = 0; r < march_box_count(m, level); ++r) box.extend(march_box(m, level, r));
+  return box;
+}
+
 // A box holding all of S for these options (what an Embree bounds callback reports): M's box for
 // the sheets, the march boxes for the smooth pieces. Empty (not valid()) when S is.
 GWNRT_HD inline Aabb surface_bounds(const ModelView& m, const TraceOptions& options) {
-  Aabb box;
+  Aabb box = march_region(m, options.level);
   if (options.mode == TraceMode::kWindingNumber) box.extend(crossing_box(m));
-  for (uint32_t r = 0; r < march_box_count(m, options.level); ++r) box.extend(march_box(m, options.level, r));
   return box;
 }
 
