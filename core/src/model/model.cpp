@@ -146,11 +146,10 @@ Status GwnModel::prepare(uint32_t parts) const {
   if (!deferral_) return {StatusCode::kInvalidArgument, kEmptyModel};
   return guard_status("GwnModel::prepare", [&] {
     std::lock_guard<std::mutex> lock(deferral_->mutex);
-    if (parts & (kPartBoundary | kPartSheets)) {
+    if (parts & (kPartBoundary | kPartSheets | kPartLevelFreeCells)) {
       if (Status s = build_boundary(); !s.ok()) return s;
     }
     if (parts & kPartLevelFreeCells) {
-      if (Status s = build_boundary(); !s.ok()) return s;
       if (Status s = build_level_free_cells_locked(); !s.ok()) return s;
     }
     if ((parts & kPartSheets) && !(deferral_->built.load(std::memory_order_relaxed) & kPartSheets) &&

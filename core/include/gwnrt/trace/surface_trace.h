@@ -362,15 +362,16 @@ class SurfaceTracer {
       float safe = fmaxf(rho, 0.5f * eps_);  // R -> 0 on ∂M itself: keep moving
       // Across the level-free cells ahead at once where they reach farther: as safe a step.
       const float cells = free_cells_ ? level_free_run(m_.level_free, s.x, dir_) : 0.0f;
-      if (cells > safe) safe = cells;
+      const bool across_cells = cells >= safe;  // safe > 0: a run of cells, then never over-stepped
+      if (across_cells) safe = cells;
       if (t + safe >= t_end) return false;
       mem.t_prev = t;
       mem.rho_prev = safe;
       mem.have_prev = true;
-      mem.certified = rho >= 0.5f * eps_ || cells >= safe;  // a safe step (over-stepping keeps it safe or goes back)
+      mem.certified = rho >= 0.5f * eps_ || across_cells;  // a safe step (over-stepping keeps it safe or goes back)
       mem.phi_prev = s.phi;
       mem.below_prev = s.levels.below;
-      if (o_.overstep && !(cells >= safe)) {
+      if (o_.overstep && !across_cells) {
         t = min_of(t + kOverstepFactor * safe, t_end);
         mem.overstepped = true;
       } else {
