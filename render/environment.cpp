@@ -27,6 +27,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "gwnrt/base/memory.h"
+#include "render/image_output.h"
 
 namespace gwnrt::render {
 
@@ -100,12 +101,6 @@ void fill_cdf(const double* w, int n, float* cdf) {
     cdf[k + 1] = total > 0.0 ? float(running / total) : float(double(k + 1) / n);
   }
   cdf[n] = 1.0f;
-}
-
-Status oiio_error(const std::string& path, const std::string& what, std::string message) {
-  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
-  if (message.empty()) message = "unknown OpenImageIO error";
-  return {StatusCode::kIoError, path + ": " + what + ": " + message};
 }
 
 }  // namespace

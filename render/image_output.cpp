@@ -27,13 +27,6 @@ float srgb_encode(float linear) {
   return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-Status oiio_error(const std::string& path, const std::string& what, std::string message) {
-  if (message.empty()) message = "unknown OpenImageIO error";
-  // OpenImageIO messages may end in a newline; the caller prints its own.
-  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
-  return {StatusCode::kIoError, path + ": " + what + ": " + message};
-}
-
 // Writes `bytes` to `path`, checking the write, the flush and the close: a full disk is often
 // reported only by the last two.
 Status write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
@@ -64,6 +57,13 @@ std::vector<uint8_t> encode_srgb8(const Image& image) {
 }
 
 }  // namespace
+
+Status oiio_error(const std::string& path, const std::string& what, std::string message) {
+  // OpenImageIO messages may end in a newline; the caller prints its own.
+  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+  if (message.empty()) message = "unknown OpenImageIO error";
+  return {StatusCode::kIoError, path + ": " + what + ": " + message};
+}
 
 std::optional<ImageFormat> image_format_for(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();

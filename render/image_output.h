@@ -35,6 +35,10 @@ Status write_image(const std::string& path, const Image& image, const std::strin
 // file, at most about the size of its raw pixels), for checking a size before rendering it.
 uint64_t write_image_bytes_per_pixel(ImageFormat format, int channels);
 
+// An OpenImageIO failure as a Status: "path: what: message", the message's trailing newline
+// dropped ("unknown OpenImageIO error" when it is empty).
+Status oiio_error(const std::string& path, const std::string& what, std::string message);
+
 // Why `path` cannot be written, or nothing: tried up front, before a long render, by opening it
 // for writing (creating it, and removing it again, when it does not exist yet). Names the path
 // and the system's reason (a missing or read-only directory, /proc, a directory at the path).

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -21,6 +24,16 @@ namespace gwnrt::test {
 
 // The bundled meshes, scenes and probe points (data/ at the top of the repository).
 inline std::string data_path(const std::string& name) { return std::string(GWNRT_DATA_DIR) + "/" + name; }
+
+// A whole file as bytes (empty when it cannot be read).
+inline std::string read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+inline bool all_finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 inline Mesh load_test_mesh(const std::string& name) {
   Mesh mesh;

@@ -18,8 +18,6 @@
 namespace gwnrt::render {
 namespace {
 
-constexpr float kPiF = float(kPi);
-
 uint64_t mix64(uint64_t x) {  // splitmix64's finaliser: decorrelates nearby seeds
   x += 0x9E3779B97F4A7C15ull;
   x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;

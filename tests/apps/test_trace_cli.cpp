@@ -29,7 +29,7 @@ using test::temp_path;
 // UTM-like: float steps by 0.25 to 0.5 there (y = 4e6), and GwnModel::build refused such meshes.
 using test::kUtm;
 
-std::string mesh_path() { return test::data_path("bunny_holes.obj"); }
+std::string holes_mesh_path() { return test::data_path("bunny_holes.obj"); }
 
 class TraceCliTest : public ::testing::Test {
  protected:
@@ -93,8 +93,8 @@ TEST_F(TraceCliTest, FarOffMeshTracesAsTheSameMeshAtTheOrigin) {
                     far_mesh = temp_path("utm_bunny.obj");
   const std::vector<std::array<double, 6>> rays = write_bunny_rays(near_rays);
   test::write_translated(near_rays, far_rays, kUtm, false);
-  test::write_translated(mesh_path(), far_mesh, kUtm, true);
-  const auto a = trace(mesh_path(), near_rays), b = trace(far_mesh, far_rays);
+  test::write_translated(holes_mesh_path(), far_mesh, kUtm, true);
+  const auto a = trace(holes_mesh_path(), near_rays), b = trace(far_mesh, far_rays);
   for (const std::string& f : {near_rays, far_rays, far_mesh}) std::remove(f.c_str());
   ASSERT_EQ(a.size(), rays.size() + 1);
   ASSERT_EQ(b.size(), a.size());
@@ -155,7 +155,7 @@ TEST_F(TraceCliTest, FarOffHitPositionsAreWrittenInTheInputsCoordinates) {
                     far_mesh = temp_path("utm_bunny.obj");
   const std::vector<std::array<double, 6>> given = write_bunny_rays(near_rays);
   test::write_translated(near_rays, far_rays, kUtm, false);
-  test::write_translated(mesh_path(), far_mesh, kUtm, true);
+  test::write_translated(holes_mesh_path(), far_mesh, kUtm, true);
   const auto rows = trace(far_mesh, far_rays);
 
   Mesh mesh;

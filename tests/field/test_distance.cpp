@@ -25,7 +25,7 @@ using reference::boundary_distance;
 using reference::mesh_distance;
 using reference::triangle_distance;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 struct Tri {
   dvec3 p0, p1, p2;

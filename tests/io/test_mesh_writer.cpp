@@ -30,6 +30,7 @@
 #include "gwnrt/geometry/surface_mesh.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/io/mesh_writer.h"
+#include "test_util.h"
 
 namespace gwnrt {
 namespace {
@@ -57,10 +58,7 @@ class MeshWriter : public ::testing::Test {
   fs::path dir_;
 };
 
-std::string read_bytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+using test::read_bytes;
 
 // A unit cube, moved and scaled so that its coordinates are not short decimals (the text
 // writer must keep every digit), with every per-vertex array filled. Vertex i is the corner

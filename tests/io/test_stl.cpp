@@ -43,10 +43,7 @@ constexpr const char* kRealStl[] = {"realworld/kuka_kr10r1100sixx_visual_base_li
                                     "realworld/kuka_kr150r3100_2_visual_base_link.stl",
                                     "realworld/motoman_motomini_visual_link_1_s.stl"};
 
-std::string read_bytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+using test::read_bytes;
 
 // A binary STL of the triangles given by their corners, with any 80-byte header.
 std::string binary_stl(const std::vector<std::array<vec3, 3>>& facets, std::string header = "test") {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "render/bsdf.h"
+#include "test_util.h"
 
 namespace gwnrt::render {
 namespace {
@@ -703,7 +704,7 @@ TEST(BsdfDielectric, TotalInternalReflection) {
 
 // ---- Degenerate input --------------------------------------------------------------------------
 
-bool finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using test::all_finite;
 
 TEST(BsdfDegenerate, BelowOrTangentGivesZeroAndNoNan) {
   std::vector<Material> mats = non_delta_materials();
@@ -726,7 +727,7 @@ TEST(BsdfDegenerate, BelowOrTangentGivesZeroAndNoNan) {
         const vec3 wi(-ri, 0.0f, zi);
         const Spectrum f = bsdf_eval(m, wo, wi);
         const float p = bsdf_pdf(m, wo, wi);
-        EXPECT_TRUE(finite(f) && std::isfinite(p));
+        EXPECT_TRUE(all_finite(f) && std::isfinite(p));
         if (!(z > 0.0f) || !(zi > 0.0f) || is_delta(m)) {
           EXPECT_EQ(f, Spectrum(0.0f)) << "kind " << int(m.kind) << " wo_z " << z << " wi_z " << zi;
           EXPECT_EQ(p, 0.0f);
@@ -738,7 +739,7 @@ TEST(BsdfDegenerate, BelowOrTangentGivesZeroAndNoNan) {
             BsdfSample s;
             const bool ok = bsdf_sample(m, wo, u0, u1, u2, s);
             ++checked;
-            EXPECT_TRUE(finite(s.wi) && finite(s.weight) && std::isfinite(s.pdf));
+            EXPECT_TRUE(all_finite(s.wi) && all_finite(s.weight) && std::isfinite(s.pdf));
             if (opaque && !(z > 0.0f)) {
               EXPECT_FALSE(ok) << "kind " << int(m.kind) << " wo_z " << z;
             }

@@ -37,14 +37,14 @@ void expect_refused(const std::string& text, const std::string& location, const 
   }
 }
 
-bool finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using test::all_finite;
 
 // Every corner and the centre ray of an accepted camera are finite and unit.
 void expect_finite_rays(const render::PinholeCamera& cam) {
   for (const auto& [x, y] : {std::pair{0, 0}, std::pair{cam.width - 1, 0}, std::pair{0, cam.height - 1},
                              std::pair{cam.width - 1, cam.height - 1}, std::pair{cam.width / 2, cam.height / 2}}) {
     const Ray r = cam.ray(x, y);
-    EXPECT_TRUE(finite(r.origin) && finite(r.direction));
+    EXPECT_TRUE(all_finite(r.origin) && all_finite(r.direction));
     EXPECT_NEAR(glm::length(r.direction), 1.0f, 1e-5f);
   }
 }

@@ -214,31 +214,33 @@ std::vector<Mutation> mutations(const std::vector<std::pair<std::string, std::st
   return out;
 }
 
-bool finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using test::all_finite;
 bool within(const vec3& v, float limit) {
   return std::fabs(v.x) <= limit && std::fabs(v.y) <= limit && std::fabs(v.z) <= limit;
 }
-bool radiance_ok(const Spectrum& s) { return finite(s) && s.x >= 0 && s.y >= 0 && s.z >= 0 && within(s, kMaxRadiance); }
+bool radiance_ok(const Spectrum& s) {
+  return all_finite(s) && s.x >= 0 && s.y >= 0 && s.z >= 0 && within(s, kMaxRadiance);
+}
 
 // Why an accepted scene is not one the renderer can carry, or empty. The limits are those
 // scene.h documents.
 std::string scene_problem(const SceneDesc& s) {
   const render::PinholeCamera& c = s.camera;
   if (!(c.width >= 1 && c.width <= 32768 && c.height >= 1 && c.height <= 32768)) return "image size";
-  if (!within(c.eye, 1e12f) || !finite(c.eye)) return "eye";
+  if (!within(c.eye, 1e12f) || !all_finite(c.eye)) return "eye";
   for (const auto& [x, y] : {std::pair{0, 0}, std::pair{c.width - 1, c.height - 1}, std::pair{c.width / 2, 0}}) {
     const Ray r = c.ray(x, y);
-    if (!finite(r.direction) || std::fabs(glm::length(r.direction) - 1.0f) > 1e-4f) return "camera ray";
+    if (!all_finite(r.direction) || std::fabs(glm::length(r.direction) - 1.0f) > 1e-4f) return "camera ray";
   }
   if (s.render.spp < 1 || s.render.max_depth < 1) return "render settings";
   if (s.materials.size() != s.material_names.size() || s.materials.empty()) return "materials";
   for (const Material& m : s.materials)
-    if (!radiance_ok(m.emission) || !finite(m.albedo) || !(m.ior > 0.0f) || !std::isfinite(m.roughness))
+    if (!radiance_ok(m.emission) || !all_finite(m.albedo) || !(m.ior > 0.0f) || !std::isfinite(m.roughness))
       return "material";
   for (const MeshDesc& m : s.meshes) {
     if (m.material < 0 || size_t(m.material) >= s.materials.size()) return "mesh material";
     for (const vec3& p : m.mesh.positions)
-      if (!finite(p) || !within(p, 1e12f)) return "mesh vertex";
+      if (!all_finite(p) || !within(p, 1e12f)) return "mesh vertex";
   }
   for (const GwnObjectDesc& g : s.gwn_objects) {
     if (g.material < 0 || size_t(g.material) >= s.materials.size()) return "object material";
@@ -250,7 +252,7 @@ std::string scene_problem(const SceneDesc& s) {
     }
   }
   if (!radiance_ok(s.environment.radiance) || !radiance_ok(s.sun.radiance)) return "light";
-  if (!finite(s.sun.direction) || std::fabs(glm::length(s.sun.direction) - 1.0f) > 1e-4f) return "sun direction";
+  if (!all_finite(s.sun.direction) || std::fabs(glm::length(s.sun.direction) - 1.0f) > 1e-4f) return "sun direction";
   return {};
 }
 

@@ -20,12 +20,12 @@ namespace gwnrt {
 using test::build_model;
 using test::load_test_mesh;
 
-inline constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 inline constexpr double kTwoPi = 2.0 * kPi;
 
-class Random {
+class RandomDouble {
  public:
-  explicit Random(uint32_t seed) : g_(seed) {}
+  explicit RandomDouble(uint32_t seed) : g_(seed) {}
   double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(g_); }
   double exp10(double lo, double hi) { return std::pow(10.0, uniform(lo, hi)); }  // log-uniform
   int index(int n) { return std::uniform_int_distribution<int>(0, n - 1)(g_); }
@@ -117,7 +117,7 @@ inline std::string point_string(const vec3& x) {
 // Far away too, where |w| is so small that w mod 1 of a negative w rounds to 1 unless folded.
 enum class PointKind { kNearBoundary = 0, kNearConeEdge = 1, kBox = 2, kFar = 3 };
 
-inline vec3 sample_point(const GwnModel& model, const BoundaryRef& boundary, PointKind kind, Random& rng) {
+inline vec3 sample_point(const GwnModel& model, const BoundaryRef& boundary, PointKind kind, RandomDouble& rng) {
   switch (kind) {
     case PointKind::kNearBoundary: {
       const size_t s = size_t(rng.index(int(boundary.size())));

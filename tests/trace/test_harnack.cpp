@@ -35,7 +35,7 @@ double step_root(double p) {
 }
 
 TEST(Phase, GradientBoundStepSolvesItsEquation) {
-  Random rng(4404);
+  RandomDouble rng(4404);
   double max_theta_error = 0, max_equation_error = 0;
   int near_one = 0, zero_steps_on_overflow = 0;
   for (int i = 0; i < 40000; ++i) {
@@ -99,7 +99,7 @@ void check_steps_on(const char* name, const Mesh& mesh, uint32_t seed, int point
   const ModelView view = model.view();
   const BoundaryRef boundary = boundary_ref(model);
   const TriangleTreeView triangles = model.triangle_view();
-  Random rng(seed);
+  RandomDouble rng(seed);
   constexpr int kSamples = 20;
   double worst_use = 0;  // the largest share of the gap to a level that a step used
   int steps = 0, crossings_at_triple = 0, triple_tries = 0;

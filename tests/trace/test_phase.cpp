@@ -125,7 +125,7 @@ const char* kKindNames[4] = {"near dM", "near cone edge", "in box", "far away"};
 // ---------------------------------------------------------------------------------------------
 
 TEST(Phase, SegmentIntegralBound) {
-  Random rng(4101);
+  RandomDouble rng(4101);
   double min_ratio = kInf, max_ratio = 0, max_quadrature_error = 0;
   int kind_count[5] = {0, 0, 0, 0, 0};
   for (int i = 0; i < 20000; ++i) {
@@ -206,7 +206,7 @@ TEST(Phase, SegmentIntegralBound) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(Phase, HalfAngleSumMatchesAtan2Sum) {
-  Random rng(4202);
+  RandomDouble rng(4202);
   double max_error = 0;
   int zeros = 0, on_cut = 0;
   for (int trial = 0; trial < 400; ++trial) {
@@ -368,7 +368,7 @@ void check_bounds_on(const char* name, const Mesh& mesh, uint32_t seed, const in
   ASSERT_GT(boundary.size(), 0u);
   const float exact_radius = smallest_cone_cluster_radius(model);
   check_cone_lengths(model);
-  Random rng(seed);
+  RandomDouble rng(seed);
   KindStats stats[4];
   for (int k = 0; k < 4; ++k)
     for (int i = 0; i < counts[k]; ++i) {
@@ -626,7 +626,7 @@ void check_cone_on(const char* name, const Mesh& mesh, bool expect_mean_on_a_seg
   const ModelView view = model.view();
   const BoundaryRef boundary = boundary_ref(model);
   const float exact_radius = smallest_cone_cluster_radius(model);
-  Random rng(seed);
+  RandomDouble rng(seed);
   double worst_distance_error = 0, worst_phi_error = 0, worst_near_phi_error = 0;
   int exact_points = 0;
   for (size_t s = 0; s < boundary.size(); ++s)

@@ -24,7 +24,7 @@ using reference::ReferenceMode;
 using test::build_model;
 using test::load_test_mesh;
 
-inline constexpr double kInf = std::numeric_limits<double>::infinity();
+using test::kInf;
 
 inline double box_diagonal(const Aabb& b) { return glm::length(dvec3(b.hi) - dvec3(b.lo)); }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <type_traits>
 
 namespace gwnrt {
@@ -43,6 +44,11 @@ inline std::string non_finite_coordinate(float x, float y, float z) {
   const bool infinite = std::isinf(x) || std::isinf(y) || std::isinf(z);
   return cat("has a non-finite coordinate (", x, ", ", y, ", ", z, ")",
              infinite ? std::string_view(": infinite, or beyond float's range (+-3.4e38)") : std::string_view());
+}
+
+// The system's words for an errno value (0: the call set none).
+inline std::string errno_text(int err) {
+  return err ? std::error_code(err, std::generic_category()).message() : std::string("unknown error");
 }
 
 }  // namespace gwnrt

@@ -22,10 +22,6 @@
 namespace gwnrt {
 namespace {
 
-std::string errno_text(int err) {
-  return err ? std::error_code(err, std::generic_category()).message() : std::string("unknown error");
-}
-
 // Output file
 
 class OutFile {

@@ -31,8 +31,6 @@ struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
 
-std::string errno_text(int err) { return std::error_code(err, std::generic_category()).message(); }
-
 // Checks the lengths of the lines that end in data[from, to) and of the one still open at `to`,
 // as bytes arrive: `line_start` is where the open line began, `line_no` its number.
 struct LineCheck {
@@ -133,7 +131,7 @@ Status read_file(const std::string& path, std::string& data, const ReadLimits& l
     std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
     if (!f) {
       const int err = errno;
-      return {StatusCode::kIoError, cat(path, ": cannot open: ", err ? errno_text(err) : "unknown error")};
+      return {StatusCode::kIoError, cat(path, ": cannot open: ", errno_text(err))};
     }
     // Only a regular file has a size to check before reading; /dev/zero or a pipe is read as a stream.
     const bool regular = std::filesystem::is_regular_file(path, ec);
