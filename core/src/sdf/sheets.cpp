@@ -335,20 +335,24 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
   const vec3 extent = view.bounds.hi - view.bounds.lo;
   const float diagonal = glm::length(extent);
   const std::vector<LaneFrame> frames = lane_frames(tree);
-  // w at x, exactly: w_S(x) less M's jumps ahead of x plus S's, along the axis ray that leaves the
-  // box soonest (field/crossing_winding.h).
-  const auto winding_at = [&](const vec3& x) {
-    const RayFrame frame = shortest_exit_axis_ray(view.bounds, x);
+  // M's jumps ahead of x along `frame`, less the lanes whose oriented box the ray's line misses,
+  // where the clusters are long: the axis-aligned box of a cluster of slivers reaches across the
+  // whole fan (a crossing ray of the classification met most of them), its oriented box is as
+  // thin as the cluster.
+  const auto mesh_ahead = [&](const RayFrame& frame) {
     int ahead = 0;
     auto crossing = [&](uint32_t, float, int k) { ahead += k; };
-    // Less the lanes whose oriented box the ray's line misses, where the clusters are long: the
-    // axis-aligned box of a cluster of slivers reaches across the whole fan (a crossing ray of the
-    // classification met most of them), its oriented box is as thin as the cluster.
     const dvec3 origin(frame.origin);
     visit_axis_crossings(tree.bvh, tree.vertices, frame, 0.0f, crossing, 0, [&](uint32_t ni, const WideNode&, int l) {
       return frames.empty() || !frames[size_t(ni) * kBvhWidth + l].line_misses(origin, frame.kz);
     });
-    double w = -double(ahead);
+    return ahead;
+  };
+  // w at x, exactly: w_S(x) less M's jumps ahead of x plus S's, along the axis ray that leaves the
+  // box soonest (field/crossing_winding.h).
+  const auto winding_at = [&](const vec3& x) {
+    const RayFrame frame = shortest_exit_axis_ray(view.bounds, x);
+    double w = -double(mesh_ahead(frame));
     if (spanning.triangle_count > 0) {
       using ConeSum = detail::ConeCrossingVisitor<false, false>::type;
       ConeSum cone(spanning, frame, x, kConeBeta, nullptr);
@@ -357,28 +361,99 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
     }
     return w;
   };
-  tbb::parallel_for(uint32_t(0), tree.triangle_count, [&](uint32_t i) {
+  // The two points of triangle i (tree order): its centroid c ∓ δu along the unit normal u, on
+  // either side of the triangle's stack (it and any triangle coincident with it at c): the
+  // difference of w there is the stack's jump k, their mean w_o at c to second order in δ. Along
+  // the normal, not along the ray's axis: a tilted offset moves the two points apart across the
+  // plane too, and beside a sliver's neighbours w_o then errs by that shift times δ over the
+  // squared width. δ is far above the rounding of the centroid and of the vertices relative to it
+  // (a few ulps of the coordinates), and far below any feature a mesh resolves. (Not c itself: a
+  // stacked copy that is a loop of ∂M on its own has c as its cone's apex, where w_C is
+  // undefined.) A zero-area triangle has no side of its own: both points are c.
+  const auto sides = [&](uint32_t i, vec3(&point)[2], bool& has_area) {
     const dvec3 p0(tree.vertices[3 * i]), p1(tree.vertices[3 * i + 1]), p2(tree.vertices[3 * i + 2]);
     const dvec3 centroid = (p0 + p1 + p2) / 3.0;
     const dvec3 normal = glm::cross(p1 - p0, p2 - p0);  // in double: a sliver's is exact, not float noise
     const double area2 = glm::length(normal);
-    // w at behind = c − δu and front = c + δu along the unit normal u, on either side of the
-    // triangle's stack (it and any triangle coincident with it at c): their difference is the
-    // stack's jump k, their mean w_o at c to second order in δ. Along the normal, not along the
-    // ray's axis: a tilted offset moves the two points apart across the plane too, and beside a
-    // sliver's neighbours w_o then errs by that shift times δ over the squared width. δ is
-    // far above the rounding of the centroid and of the vertices relative to it (a few ulps of the
-    // coordinates), and far below any feature a mesh resolves. (Not c itself: a stacked copy that
-    // is a loop of ∂M on its own has c as its cone's apex, where w_C is undefined.) A closed mesh
-    // has whole-number sides, so its w_o is an exact half-integer.
     const double delta =
         2e-6 * (double(diagonal) + std::max({std::abs(centroid.x), std::abs(centroid.y), std::abs(centroid.z)}));
-    const dvec3 u = area2 > 0.0 ? normal / area2 : dvec3(0.0, 0.0, 1.0);  // zero area: no side of its own
-    const double w_behind = winding_at(vec3(centroid - delta * u)), w_front = winding_at(vec3(centroid + delta * u));
-    const long own = area2 > 0.0 ? std::lround(w_behind - w_front) : 0;
+    const dvec3 u = area2 > 0.0 ? normal / area2 : dvec3(0.0, 0.0, 1.0);
+    point[0] = vec3(centroid - delta * u);
+    point[1] = vec3(centroid + delta * u);
+    has_area = area2 > 0.0;
+  };
+  // A closed mesh has whole-number sides, so its w_o is an exact half-integer.
+  const auto store = [&](uint32_t i, double w_behind, double w_front, bool has_area) {
+    const long own = has_area ? std::lround(w_behind - w_front) : 0;
     out[tree.triangle_ids[i]] = float(0.5 * (w_behind + w_front));
     jump[tree.triangle_ids[i]] = int8_t(own < -127 ? -127 : (own > 127 ? 127 : own));
-  });
+  };
+  const auto classify_one = [&](uint32_t i) {
+    vec3 point[2];
+    bool has_area;
+    sides(i, point, has_area);
+    store(i, winding_at(point[0]), winding_at(point[1]), has_area);
+  };
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  // Four neighbouring triangles (tree order) at once: w_S at their eight points from one batched
+  // traversal of S's tree, each point's jumps (S's and M's) from walks along the first point's
+  // axis (the batch needs one axis; each point's sign is the side of the box it leaves sooner).
+  // A point the batch is unsure of takes winding_at. Returns how many it was unsure of.
+  constexpr uint32_t kGroup = 4;
+  const auto classify_group = [&](uint32_t first, uint32_t count) {
+    vec3 point[kGroup][2];
+    bool has_area[kGroup];
+    for (uint32_t k = 0; k < count; ++k) sides(first + k, point[k], has_area[k]);
+    const int axis = shortest_exit_axis_ray(view.bounds, point[0][0]).kz;
+    int mesh_jumps[kGroup][2], cone_jumps[kGroup][2];
+    ConeWindingBatch<2 * kGroup> batch;
+    for (uint32_t k = 0; k < count; ++k)
+      for (int side = 0; side < 2; ++side) {
+        const vec3& x = point[k][side];
+        vec3 direction(0.0f);
+        direction[axis] = view.bounds.hi[axis] - x[axis] <= x[axis] - view.bounds.lo[axis] ? 1.0f : -1.0f;
+        const RayFrame frame = make_ray_frame(x, direction);
+        mesh_jumps[k][side] = mesh_ahead(frame);
+        int ahead = 0;
+        visit_axis_crossings(spanning.bvh, spanning.vertices, frame, 0.0f,
+                             [&](uint32_t, float, int jump) { ahead += jump; });
+        cone_jumps[k][side] = ahead;
+        batch.add(x);
+      }
+    batch.evaluate(spanning, kConeBeta, axis);
+    uint32_t unsure = 0;
+    for (uint32_t k = 0; k < count; ++k) {
+      double w[2];
+      for (int side = 0; side < 2; ++side) {
+        const float f = batch.crossing_winding(int(2 * k + side), cone_jumps[k][side], mesh_jumps[k][side]);
+        unsure += !(f == f);
+        w[side] = f == f ? double(f) : winding_at(point[k][side]);
+      }
+      store(first + k, w[0], w[1], has_area[k]);
+    }
+    return unsure;
+  };
+  // Runs of kRunGroups groups: once a group leaves half its points unsure (a flat fan, whose
+  // spanning surface lies in M's plane: every side point is within the batch's plane tolerance),
+  // the rest of its run goes one by one. Fixed runs, so the result does not depend on the threads.
+  constexpr uint32_t kRunGroups = 16;
+  if (spanning.triangle_count > 0) {
+    constexpr uint32_t kRun = kGroup * kRunGroups;
+    tbb::parallel_for(uint32_t(0), (tree.triangle_count + kRun - 1) / kRun, [&](uint32_t run) {
+      const uint32_t end = std::min(tree.triangle_count, (run + 1) * kRun);
+      bool batching = true;
+      for (uint32_t first = run * kRun; first < end; first += kGroup) {
+        const uint32_t count = std::min(kGroup, end - first);
+        if (batching)
+          batching = classify_group(first, count) <= count;  // half its 2 · count points
+        else
+          for (uint32_t i = first; i < first + count; ++i) classify_one(i);
+      }
+    });
+    return;
+  }
+#endif
+  tbb::parallel_for(uint32_t(0), tree.triangle_count, classify_one);
 }
 
 void other_triangles_winding(const TriangleTree& tree, std::span<const uint32_t> leaves, float beta,
