@@ -63,6 +63,22 @@ inline constexpr bool kAddressSanitizer = false;
 inline constexpr bool kAddressSanitizer = false;
 #endif
 
+// ThreadSanitizer runs the plugin tests' single-threaded ray loops ten times slower and more:
+// there they look for races, which a quarter of the rays meets as well.
+#if defined(__SANITIZE_THREAD__)
+inline constexpr bool kThreadSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+inline constexpr bool kThreadSanitizer = true;
+#else
+inline constexpr bool kThreadSanitizer = false;
+#endif
+#else
+inline constexpr bool kThreadSanitizer = false;
+#endif
+// A side of a ray lattice (n² rays): half as many per side under ThreadSanitizer.
+inline int lattice_side(int n) { return kThreadSanitizer ? (n + 1) / 2 : n; }
+
 // Float random numbers for rays and points (a fixed seed: the tests are reproducible).
 class Random {
  public:

@@ -252,7 +252,7 @@ TEST(EmbreePlugin, FarOffScanLoadsRecentred) {
   }
   gwnrtReleaseMesh(near_mesh);
   gwnrtReleaseMesh(far_mesh);
-  const std::vector<Ray> rays = bunny_holes_rays(model, 24);
+  const std::vector<Ray> rays = bunny_holes_rays(model, test::lattice_side(24));
   size_t agree = 0, hits = 0, close = 0;
   for (const Ray& r : rays) {
     Ray moved = r;

@@ -54,8 +54,8 @@ TEST(EmbreePlugin, InstancesMatchTransformedMesh) {
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
 
   // World cameras, and each instance's views of its holes (object-space rays moved to world).
-  std::vector<Ray> rays = camera_rays(scaled(world, 0.7f), 36, {{10, -40}, {190, -20}, {95, 60}});
-  const std::vector<Ray> holes = hole_rays(build_model(mesh), 28);
+  std::vector<Ray> rays = camera_rays(scaled(world, 0.7f), test::lattice_side(36), {{10, -40}, {190, -20}, {95, 60}});
+  const std::vector<Ray> holes = hole_rays(build_model(mesh), test::lattice_side(28));
   for (const InstanceCase& c : cases) {
     for (const Ray& o : holes) rays.push_back(Ray{vec3(c.f.apply(dvec3(o.origin))), vec3(c.f.L * dvec3(o.direction))});
   }

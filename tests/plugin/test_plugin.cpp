@@ -215,7 +215,7 @@ TEST(EmbreePlugin, OpenMeshMatchesTraceSurface) {
   scene.commit();
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
 
-  const std::vector<Ray> rays = bunny_holes_rays(model, 40);
+  const std::vector<Ray> rays = bunny_holes_rays(model, test::lattice_side(40));
   const reference::ReferenceMesh exact = reference::reference_mesh(mesh);
   const double diag = diagonal(model.bounds());
   size_t sheet = 0, smooth = 0, limited = 0, off_surface = 0;
@@ -287,7 +287,7 @@ TEST(EmbreePlugin, OptionsReachTheTracer) {
   const Mesh mesh = load_test_mesh("bunny_holes.obj");
   const GwnModel model = build_model(mesh);
   ASSERT_TRUE(model.prepare(kPartLevelFreeCells).ok());  // as the plugin's mesh has them
-  const std::vector<Ray> rays = hole_rays(model, 20);
+  const std::vector<Ray> rays = hole_rays(model, test::lattice_side(20));
   Device device;
   struct Case {
     GWNRTMode mode;
@@ -439,7 +439,7 @@ TEST(EmbreePlugin, BoundsHoldSurfaceFarOutsideTheBox) {
   scene.commit();
   ASSERT_EQ(device.error(), RTC_ERROR_NONE);
   const Aabb padded = grown(box, float(1e-3 * diag));
-  const std::vector<Ray> rays = soup_rays(1000, 31);
+  const std::vector<Ray> rays = soup_rays(test::kThreadSanitizer ? 250 : 1000, 31);
   size_t hits = 0, far_hits = 0;
   Worst dt;
   for (const Ray& r : rays) {
