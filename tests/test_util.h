@@ -49,30 +49,25 @@ inline GwnModel build_model(Mesh mesh) {
   return model;
 }
 
+// Clang names the sanitizers by __has_feature, GCC by __SANITIZE_ADDRESS__ and __SANITIZE_THREAD__.
+#if defined(__has_feature)
+#define GWNRT_TEST_HAS_FEATURE(name) __has_feature(name)
+#else
+#define GWNRT_TEST_HAS_FEATURE(name) 0
+#endif
+
 // Under AddressSanitizer (CI's sanitize job) the tests that need size to show a cost's growth
 // run smaller: there they look for memory errors, and the Release suite for the growth.
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || GWNRT_TEST_HAS_FEATURE(address_sanitizer)
 inline constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-inline constexpr bool kAddressSanitizer = true;
-#else
-inline constexpr bool kAddressSanitizer = false;
-#endif
 #else
 inline constexpr bool kAddressSanitizer = false;
 #endif
 
 // ThreadSanitizer runs the plugin tests' single-threaded ray loops ten times slower and more:
 // there they look for races, which a quarter of the rays meets as well.
-#if defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_THREAD__) || GWNRT_TEST_HAS_FEATURE(thread_sanitizer)
 inline constexpr bool kThreadSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-inline constexpr bool kThreadSanitizer = true;
-#else
-inline constexpr bool kThreadSanitizer = false;
-#endif
 #else
 inline constexpr bool kThreadSanitizer = false;
 #endif

@@ -410,9 +410,7 @@ void other_triangles_winding_by_crossings(const ModelView& view, const TriangleT
     for (uint32_t k = 0; k < count; ++k)
       for (int side = 0; side < 2; ++side) {
         const vec3& x = point[k][side];
-        vec3 direction(0.0f);
-        direction[axis] = view.bounds.hi[axis] - x[axis] <= x[axis] - view.bounds.lo[axis] ? 1.0f : -1.0f;
-        const RayFrame frame = make_ray_frame(x, direction);
+        const RayFrame frame = shortest_exit_axis_ray(view.bounds, x, 1u << axis);
         mesh_jumps[k][side] = mesh_ahead(frame);
         int ahead = 0;
         visit_axis_crossings(spanning.bvh, spanning.vertices, frame, 0.0f,
