@@ -80,6 +80,7 @@ nlohmann::json report_json(const gwnrt::MeshingStats& stats, const gwnrt::MeshQu
                     {"normal_deviation_mean_deg", d.normal_deviation_mean_deg},
                     {"normal_deviation_max_deg", d.normal_deviation_max_deg},
                     {"surface_points", d.surface_points},
+                    {"sheet_points", d.sheet_points},
                     {"output_samples", d.output_samples}};
   j["seconds"] = {{"total", mesh_seconds},  {"scout", p.scout},   {"corners", p.corners}, {"edges", p.edges},
                   {"vertices", p.vertices}, {"faces", p.faces},   {"repair", p.repair},   {"smoothing", p.smoothing},

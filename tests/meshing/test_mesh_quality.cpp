@@ -351,7 +351,8 @@ TEST(MeshQualityDistances, SameMeshIsAtZeroDistance) {
   const SurfaceMesh out = to_surface(f.mesh);
   const SurfaceDistances d = distances(f.model, out);
   EXPECT_EQ(d.output_samples, 20000u + f.mesh.positions.size());
-  EXPECT_GT(d.surface_points, 4000u);  // about two hits a ray (entering and leaving)
+  EXPECT_EQ(d.sheet_points, SurfaceDistanceOptions{}.sheet_samples);
+  EXPECT_GT(d.surface_points - d.sheet_points, 4000u);  // about two hits a ray (entering and leaving)
   const double tol = 1e-5 * SphereFixture::kRadius;
   EXPECT_LT(d.hausdorff_to_surface, tol);
   EXPECT_LT(d.hausdorff_from_surface, tol);
@@ -403,6 +404,44 @@ TEST(MeshQualityDistances, ScaledMeshIsAtOnePercent) {
     EXPECT_LE(v, hi);
   }
   EXPECT_NEAR(d.hausdorff_to_surface, 0.01 * SphereFixture::kRadius, 1e-6);
+}
+
+// S's points on its sheets lie on the sheet triangles only, outward: inside a sphere, a smaller
+// one of the same orientation makes w = 2 within it, so its triangles (sides 1 and 2) are no
+// sheets for w* = 1/2, and the outer sphere alone is S. Measured from the sheet points alone (no
+// rays), the outer sphere is at zero distance with S's normals; the inner one, as output, at the
+// radii's difference.
+TEST(MeshQualityDistances, SheetPointsLieOnTheSheetsOnly) {
+  const Mesh outer = test::make_sphere(3, 1.0f), inner = test::make_sphere(3, 0.5f);
+  Mesh both = outer;
+  const uint32_t base = uint32_t(both.positions.size());
+  both.positions.insert(both.positions.end(), inner.positions.begin(), inner.positions.end());
+  for (const uvec3& t : inner.triangles) both.triangles.push_back(t + base);
+  const GwnModel model = test::build_model(both);
+  SurfaceDistanceOptions o;
+  o.output_samples = 1000;
+  o.surface_rays = 0;
+  o.sheet_samples = 5000;
+  SurfaceDistances d;
+  ASSERT_TRUE(surface_distances(model, to_surface(outer), o, d).ok());
+  EXPECT_EQ(d.surface_points, 5000u);
+  EXPECT_EQ(d.sheet_points, 5000u);
+  EXPECT_LT(d.hausdorff_from_surface, 1e-5);
+  EXPECT_LT(d.normal_deviation_max_deg, 1e-3);
+  ASSERT_TRUE(surface_distances(model, to_surface(inner), o, d).ok());
+  // A point p of the outer faces has h_outer <= |p| <= 1 (h: the nearest face plane's distance
+  // from the centre); the inner mesh lies within radius 0.5 and holds the ball of radius h_inner.
+  const auto nearest_plane = [](const Mesh& m) {
+    double h = 1e30;
+    for (const uvec3& t : m.triangles) {
+      const dvec3 p0(m.positions[t[0]]), p1(m.positions[t[1]]), p2(m.positions[t[2]]);
+      h = std::min(h, glm::dot(glm::normalize(glm::cross(p1 - p0, p2 - p0)), p0));
+    }
+    return h;
+  };
+  EXPECT_GT(d.mean_from_surface, nearest_plane(outer) - 0.5 - 1e-6);
+  EXPECT_LT(d.hausdorff_from_surface, 1.0 - nearest_plane(inner) + 1e-6);
+  EXPECT_GT(d.hausdorff_from_surface, 0.45);
 }
 
 // S's points find their nearest output triangles in the grid's rings of cells, among the wide

@@ -625,6 +625,37 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   std::vector<SurfacePoint> surface_points;
   for (const auto& v : ray_points) surface_points.insert(surface_points.end(), v.begin(), v.end());
   ray_points = {};
+  // Points of S's sheets: M's sheet triangles for the level (the model's classification, which its
+  // signed distance measures the sheets by), area-weighted, outward toward the side below w*.
+  {
+    const TriangleTreeView& sheets = view.sheets;
+    const std::span<const int8_t> jump = model.sheet_jump();
+    std::vector<double> cumulative(sheets.triangle_count);
+    double total = 0;
+    for (uint32_t t = 0; t < sheets.triangle_count; ++t) {
+      const dvec3 p0(sheets.vertices[3 * t]);
+      total +=
+          0.5 * glm::length(glm::cross(dvec3(sheets.vertices[3 * t + 1]) - p0, dvec3(sheets.vertices[3 * t + 2]) - p0));
+      cumulative[t] = total;
+    }
+    if (total > 0) {
+      for (uint32_t s = 0; s < options.sheet_samples; ++s) {
+        const double pick = uniform01(rng) * total;
+        const uint32_t t = uint32_t(std::min<size_t>(
+            std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(), cumulative.size() - 1));
+        const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
+        const dvec3 p0(sheets.vertices[3 * t]), p1(sheets.vertices[3 * t + 1]), p2(sheets.vertices[3 * t + 2]);
+        const dvec3 p = (1 - r1) * p0 + r1 * (1 - r2) * p1 + r1 * r2 * p2;
+        const dvec3 n = glm::cross(p1 - p0, p2 - p0);
+        const double length = glm::length(n);
+        if (!(length > 0)) continue;  // zero area: picked with probability 0
+        // w is higher behind the normal by the triangle's jump: {w > w*} lies behind for k > 0.
+        const double sign = jump[sheets.triangle_ids[t]] > 0 ? 1.0 : -1.0;
+        surface_points.push_back({vec3(p), vec3(sign * n / length)});
+        ++result.sheet_points;
+      }
+    }
+  }
   result.surface_points = surface_points.size();
 
   // S -> output: the output's triangles of non-zero area in rings of the grid's cells around each

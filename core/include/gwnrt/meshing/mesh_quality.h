@@ -81,7 +81,8 @@ struct SurfaceDistances {
   // point of the output (interpolated vertex normals, or the face normal where the mesh has
   // none), both outward: a flipped output is 180°.
   double normal_deviation_mean_deg = 0, normal_deviation_max_deg = 0;
-  uint64_t surface_points = 0;                              // points of S found (ray hits)
+  uint64_t surface_points = 0;                              // points of S measured: ray hits and sheet points
+  uint64_t sheet_points = 0;                                // of which taken on the sheets directly
   uint64_t output_samples = 0;                              // output points measured (random points + vertices)
   double seconds_to_surface = 0, seconds_from_surface = 0;  // what each direction took
 };
@@ -93,8 +94,13 @@ struct SurfaceDistanceOptions {
   // And vertices (where Hausdorff peaks): every vertex a triangle uses when there are at most this
   // many, else this many of them at random; 0: none.
   uint32_t vertex_samples = 20000;
-  uint32_t surface_rays = 10000;   // rays whose hits on S are its sample points
+  // Rays whose hits on S are sample points: the only ones on S's smooth pieces (on an open scan a
+  // ray costs a millisecond of Harnack steps).
+  uint32_t surface_rays = 2500;
   uint32_t max_hits_per_ray = 16;  // points of S taken along one ray (at least 1)
+  // Random points on S's sheets (M's triangles that are sheets for the level), area-weighted: as
+  // many points of S as a ray's hits at a small fraction of their cost.
+  uint32_t sheet_samples = 10000;
   // TraceOptions::epsilon: hits on the smooth pieces of S lie within this fraction of the model's
   // box diagonal of S (sheet hits are exact to float round-off), so it bounds what the distances
   // from S can resolve there.
@@ -107,8 +113,9 @@ struct SurfaceDistanceOptions {
 // points of the output triangles plus its vertices. S -> output: the points of S are the hits of
 // rays from random points on a sphere about the model's box (1.5 × its half-diagonal) toward
 // random points in the box, every hit along a ray (up to max_hits_per_ray, so that parts of S
-// hidden from outside are sampled too; not uniform in area: the maxima are what matter), each
-// measured to the nearest point of the output by a BVH over its non-zero-area triangles.
+// hidden from outside are sampled too; not uniform in area: the maxima are what matter), and
+// sheet_samples area-weighted random points of the sheet triangles, each measured to the nearest
+// point of the output by a BVH over its non-zero-area triangles.
 // At the nearest point the output's normal is taken from whichever triangle within 1e-6 of the
 // output's box diagonal of it agrees best with S (where two triangles are equally near up to
 // float round-off, on an edge, either is the nearest).
