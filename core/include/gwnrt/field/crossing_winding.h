@@ -502,23 +502,41 @@ GWNRT_HD inline bool point_on_leaf(const TriangleTreeView& tree, const WideNode&
 inline constexpr float kConeNudgeUlps = 2.0f;
 inline constexpr int kConeNudgeTries = 4;
 
+// The moves above, one after another: next() gives x_in moved kConeNudgeUlps ulps (or 2^-40 of
+// the box), then 8x farther each time, while tries are left.
+struct ConeNudge {
+  vec3 x_in;
+  float step;
+  int tries = 0;
+  GWNRT_HD ConeNudge(const Aabb& bounds, const vec3& x) : x_in(x) {
+    const vec3 extent = bounds.hi - bounds.lo;
+    const float largest = max_of(fabsf(x.x), max_of(fabsf(x.y), fabsf(x.z)));
+    // 1.2e-7: about one ulp; 9.1e-13: 2^-40.
+    step = max_of(kConeNudgeUlps * 1.2e-7f * largest, 9.1e-13f * max_of(extent.x, max_of(extent.y, extent.z)));
+  }
+  GWNRT_HD bool left() const { return tries < kConeNudgeTries; }
+  GWNRT_HD vec3 next() {
+    const vec3 moved = x_in + step * vec3(0.5345225f, -0.2672612f, 0.8017837f);  // a generic unit direction
+    step *= 8.0f;
+    ++tries;
+    return moved;
+  }
+};
+
 template <bool WantGradient, bool WantHessian>
 GWNRT_HD WindingSample winding_number_crossing(const ModelView& m, const vec3& x_in,
                                                float cone_beta = (WantGradient || WantHessian) ? kConeDerivativeBeta
                                                                                                : kConeBeta,
                                                CrossingStats* stats = nullptr) {
   vec3 x = x_in;
-  const vec3 extent = m.bounds.hi - m.bounds.lo;
   const float largest = max_of(fabsf(x.x), max_of(fabsf(x.y), fabsf(x.z)));
-  // 1.2e-7: about one ulp; 9.1e-13: 2^-40.
-  float nudge = max_of(kConeNudgeUlps * 1.2e-7f * largest, 9.1e-13f * max_of(extent.x, max_of(extent.y, extent.z)));
-  for (int attempt = 0;; ++attempt) {
+  ConeNudge nudge(m.bounds, x_in);
+  for (;;) {
     const RayFrame frame = shortest_exit_axis_ray(m.bounds, x);
     typename detail::ConeCrossingVisitor<WantGradient, WantHessian>::type cone(m.cone, frame, x, cone_beta, stats);
     cone.traverse();
-    if (cone.on_cone && attempt < kConeNudgeTries) {
-      x = x_in + nudge * vec3(0.5345225f, -0.2672612f, 0.8017837f);  // a generic unit direction
-      nudge *= 8.0f;
+    if (cone.on_cone && nudge.left()) {
+      x = nudge.next();
       continue;
     }
     // On M the crossings ahead give the side behind x along the ray, where w is the mean of its
