@@ -33,6 +33,12 @@ inline std::string read_bytes(const std::string& path) {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// What the exact methods by crossings promise (README): |Δw| <= kCrossingTolerance wherever x is
+// farther than kCrossingNearMesh of the box diagonal from M (nearer, the side of M that x is on
+// is a matter of float round-off).
+inline constexpr double kCrossingTolerance = 1e-5;
+inline constexpr double kCrossingNearMesh = 1e-5;
+
 inline bool all_finite(const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 inline Mesh load_test_mesh(const std::string& name) {

@@ -22,10 +22,8 @@ namespace {
 using test::build_model;
 using test::load_test_mesh;
 
-// What the method promises (README): |Δw| <= 1e-5 wherever x is farther than 1e-5 of the box
-// diagonal from M (nearer, the side of M that x is on is a matter of float round-off).
-constexpr double kCrossingTolerance = 1e-5;
-constexpr double kNearMesh = 1e-5;
+using test::kCrossingNearMesh;
+using test::kCrossingTolerance;
 
 // A soup that lists some faces two and three times (the second copy of every seventh face, a
 // third of every 31st), with its own vertices per copy: w jumps by 2 or 3 across those.
@@ -130,13 +128,13 @@ struct Comparison {
   double max_error = 0;
 };
 
-// Crossing w at `points` against the brute force, for those farther than kNearMesh·diag from M.
+// Crossing w at `points` against the brute force, for those farther than kCrossingNearMesh·diag from M.
 Comparison compare_with_brute_force(const std::string& name, const GwnModel& model, const reference::ReferenceMesh& ref,
                                     const std::vector<vec3>& points) {
   const ModelView v = model.view();
   std::vector<double> error(points.size(), -1.0);
   reference::parallel_over(points.size(), [&](size_t i) {
-    if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
+    if (unsigned_distance(v.triangles, points[i]).distance <= kCrossingNearMesh * ref.diagonal) return;
     const double w = winding_number_crossing<false, false>(v, points[i]).w;
     error[i] = std::fabs(w - reference::reference_w(ref, dvec3(points[i])));
   });
@@ -485,7 +483,7 @@ TEST(CrossingWinding, AutoMatchesBruteForceOnRealMeshes) {
     const std::vector<vec3> points = test::sample_points(box, count, 17);
     std::vector<double> error(points.size(), -1.0);
     reference::parallel_over(points.size(), [&](size_t i) {
-      if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
+      if (unsigned_distance(v.triangles, points[i]).distance <= kCrossingNearMesh * ref.diagonal) return;
       const double w =
           evaluate_winding(v, points[i], WindingOptions{resolve_point_method(v, WindingMethod::kAuto), {}}).w;
       error[i] = std::fabs(w - reference::reference_w(ref, dvec3(points[i])));

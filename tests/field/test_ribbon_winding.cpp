@@ -21,9 +21,8 @@ namespace {
 using test::build_model;
 using test::load_test_mesh;
 
-// As the crossing method promises: |Δw| <= 1e-5 farther than 1e-5 of the box diagonal from M.
-constexpr double kTolerance = 1e-5;
-constexpr double kNearMesh = 1e-5;
+using test::kCrossingNearMesh;
+using test::kCrossingTolerance;
 
 TEST(RibbonWinding, MatchesBruteForceOnOpenAndClosedMeshes) {
   for (const char* name : {"bunny_holes.obj", "realworld/birdBath_ggg_photogrammetry.obj",
@@ -51,7 +50,7 @@ TEST(RibbonWinding, MatchesBruteForceOnOpenAndClosedMeshes) {
         }
     std::vector<double> error(points.size(), -1.0);
     reference::parallel_over(points.size(), [&](size_t i) {
-      if (unsigned_distance(v.triangles, points[i]).distance <= kNearMesh * ref.diagonal) return;
+      if (unsigned_distance(v.triangles, points[i]).distance <= kCrossingNearMesh * ref.diagonal) return;
       // A point on a ribbon (those in the plane of a planar hole) is answered at a moved point:
       // the value must be w there, at x or at one of the first moves.
       const double w = winding_number_by_ribbons(v, points[i]);
@@ -65,7 +64,7 @@ TEST(RibbonWinding, MatchesBruteForceOnOpenAndClosedMeshes) {
     for (const double e : error)
       if (e >= 0) ++compared, worst = std::max(worst, e);
     EXPECT_GT(compared, points.size() / 2) << name;
-    EXPECT_LE(worst, kTolerance) << name << ": " << compared << " points";
+    EXPECT_LE(worst, kCrossingTolerance) << name << ": " << compared << " points";
   }
 }
 
