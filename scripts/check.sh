@@ -71,9 +71,9 @@ check_tsan() {
   # times slower than alone, TSan's costs growing with every Embree device's and TBB arena's
   # threads (243 s against 70 s). Not side by side: contention lost a worker's stack from TSan's
   # history and the suppression could not match it.
-  local shard
-  for shard in 0 1 2 3 4 5; do
-    GTEST_TOTAL_SHARDS=6 GTEST_SHARD_INDEX=$shard TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_embree_tests
+  local shard shards=6
+  for ((shard = 0; shard < shards; ++shard)); do
+    GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$shard TSAN_OPTIONS="$options" build-tsan/tests/gwnrt_embree_tests
   done
 }
 

@@ -467,6 +467,27 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
 // platform (std::uniform_real_distribution's algorithm is the library's).
 inline double uniform01(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53; }
 
+// Area-weighted random points of a list of triangles: the running total of their areas, then a
+// triangle by one search and a uniform point in it (sqrt of one uniform folds the square onto the
+// triangle without bias).
+struct AreaSampler {
+  std::vector<double> cumulative;
+  double total = 0;
+  void add(const dvec3& p0, const dvec3& p1, const dvec3& p2) {
+    total += 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
+    cumulative.push_back(total);
+  }
+  size_t triangle(std::mt19937_64& rng) const {
+    const double pick = uniform01(rng) * total;
+    return std::min<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(),
+                            cumulative.size() - 1);
+  }
+  static dvec3 point(const dvec3& p0, const dvec3& p1, const dvec3& p2, std::mt19937_64& rng) {
+    const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
+    return (1 - r1) * p0 + r1 * (1 - r2) * p1 + r1 * r2 * p2;
+  }
+};
+
 inline double angle_deg(const dvec3& a, const dvec3& b) {
   // atan2 of |a × b| and a · b keeps small angles accurate, where acos(a · b) loses half the digits.
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)) * (180.0 / kPi);
@@ -541,25 +562,13 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   const std::vector<vec3>& pos = mesh.positions;
   std::vector<vec3> samples;
   {
-    std::vector<double> cumulative(mesh.triangles.size());
-    double total = 0;
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const uvec3 v = mesh.triangles[t];
-      const dvec3 p0(pos[v[0]]);
-      total += 0.5 * glm::length(glm::cross(dvec3(pos[v[1]]) - p0, dvec3(pos[v[2]]) - p0));
-      cumulative[t] = total;
-    }
-    if (total > 0) {
+    AreaSampler area;
+    for (const uvec3& v : mesh.triangles) area.add(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]));
+    if (area.total > 0) {
       samples.reserve(options.output_samples);
       for (uint32_t s = 0; s < options.output_samples; ++s) {
-        const double pick = uniform01(rng) * total;
-        const size_t t = std::min<size_t>(
-            std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(), cumulative.size() - 1);
-        // Uniform in the triangle: sqrt of one uniform folds the square onto it without bias.
-        const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
-        const uvec3 v = mesh.triangles[t];
-        const dvec3 p = (1 - r1) * dvec3(pos[v[0]]) + r1 * (1 - r2) * dvec3(pos[v[1]]) + r1 * r2 * dvec3(pos[v[2]]);
-        samples.push_back(vec3(p));
+        const uvec3 v = mesh.triangles[area.triangle(rng)];
+        samples.push_back(vec3(AreaSampler::point(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]), rng)));
       }
     }
     if (options.vertex_samples > 0) {
@@ -630,22 +639,14 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   {
     const TriangleTreeView& sheets = view.sheets;
     const std::span<const int8_t> jump = model.sheet_jump();
-    std::vector<double> cumulative(sheets.triangle_count);
-    double total = 0;
-    for (uint32_t t = 0; t < sheets.triangle_count; ++t) {
-      const dvec3 p0(sheets.vertices[3 * t]);
-      total +=
-          0.5 * glm::length(glm::cross(dvec3(sheets.vertices[3 * t + 1]) - p0, dvec3(sheets.vertices[3 * t + 2]) - p0));
-      cumulative[t] = total;
-    }
-    if (total > 0) {
+    AreaSampler area;
+    for (uint32_t t = 0; t < sheets.triangle_count; ++t)
+      area.add(dvec3(sheets.vertices[3 * t]), dvec3(sheets.vertices[3 * t + 1]), dvec3(sheets.vertices[3 * t + 2]));
+    if (area.total > 0) {
       for (uint32_t s = 0; s < options.sheet_samples; ++s) {
-        const double pick = uniform01(rng) * total;
-        const uint32_t t = uint32_t(std::min<size_t>(
-            std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin(), cumulative.size() - 1));
-        const double r1 = std::sqrt(uniform01(rng)), r2 = uniform01(rng);
+        const size_t t = area.triangle(rng);
         const dvec3 p0(sheets.vertices[3 * t]), p1(sheets.vertices[3 * t + 1]), p2(sheets.vertices[3 * t + 2]);
-        const dvec3 p = (1 - r1) * p0 + r1 * (1 - r2) * p1 + r1 * r2 * p2;
+        const dvec3 p = AreaSampler::point(p0, p1, p2, rng);
         const dvec3 n = glm::cross(p1 - p0, p2 - p0);
         const double length = glm::length(n);
         if (!(length > 0)) continue;  // zero area: picked with probability 0

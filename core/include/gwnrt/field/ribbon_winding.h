@@ -7,6 +7,7 @@
 
 #include "gwnrt/base/hd.h"
 #include "gwnrt/field/crossing_winding.h"
+#include "gwnrt/field/solid_angle.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/geometry/ray.h"
 
@@ -33,11 +34,10 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
     bool on_ribbon = false;
     for (uint32_t s = 0; s < m.boundary.segment_count; ++s) {
       const dvec3 a = dvec3(m.boundary.endpoints[2 * s]) - xd, b = dvec3(m.boundary.endpoints[2 * s + 1]) - xd;
-      const double la = glm::length(a), lb = glm::length(b);
-      const double numerator = glm::dot(a, glm::cross(b, behind));
-      const double denominator = la * lb + glm::dot(a, b) + glm::dot(a, behind) * lb + glm::dot(b, behind) * la;
-      on_ribbon = on_ribbon || (numerator == 0.0 && denominator <= 0.0);
-      omega += 2.0 * atan2(numerator, denominator);
+      const SolidAngleTangent<double> t = solid_angle_tangent(a, b, behind, glm::length(a), glm::length(b), 1.0,
+                                                              glm::cross(b, behind), glm::dot(b, behind));
+      on_ribbon = on_ribbon || (t.numerator == 0.0 && t.denominator <= 0.0);
+      omega += 2.0 * atan2(t.numerator, t.denominator);
     }
     if (on_ribbon && nudge.left()) {
       x = nudge.next();
