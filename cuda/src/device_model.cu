@@ -63,6 +63,7 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
     v.boundary.lengths = b->segment_lengths.get();
     v.boundary.endpoints = b->endpoints.get();
     v.boundary.segment_ids = b->segment_ids.get();
+    v.ribbons = RibbonTreeView{};  // host only (model_view.h)
     b->view = v;
     out.buffers_ = std::move(b);
     return Status::Ok();

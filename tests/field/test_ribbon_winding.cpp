@@ -68,5 +68,107 @@ TEST(RibbonWinding, MatchesBruteForceOnOpenAndClosedMeshes) {
   }
 }
 
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// The batched ribbons (RibbonWindingBatch, M's jumps from their own walk): w within each meshing
+// beta's allowance of the scalar form wherever the batch is sure, for blocks of 8³ corners by the
+// rims along every axis (their rays pass by ∂M, so lanes in the beam must be opened) and for
+// points on, within round-off of and just off segments' ribbons (the batch must be right or
+// unsure); ∇w against the crossing method's at the derivatives' beta.
+TEST(RibbonWinding, BatchMatchesTheScalarForm) {
+  for (const char* name : {"bunny_holes.obj", "realworld/birdBath_ggg_photogrammetry.obj",
+                           "realworld/kuka_kr150r3100_2_visual_base_link.stl", "teapot.obj"}) {
+    const GwnModel model = build_model(load_test_mesh(name));
+    ASSERT_TRUE(model.prepare(kPartBoundary).ok());
+    const ModelView v = model.view();
+    const float diagonal = glm::length(v.bounds.hi - v.bounds.lo);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const auto segment_point = [&](uint32_t& s) {
+      s = uint32_t(rng() % v.boundary.segment_count);
+      return glm::mix(v.boundary.endpoints[2 * s], v.boundary.endpoints[2 * s + 1], u(rng));
+    };
+    // The meshing's betas with tenfold margins under what each use allows (as the cone batch's
+    // test): the corner screen's 0.02, the refinement's 2e-3, the centres' 1e-3, the exact 1e-5.
+    const float betas[4] = {1.5f, 3.0f, 5.0f, 5.0f};
+    const float tolerances[4] = {2e-3f, 2e-4f, 1e-4f, 2e-5f};
+    float worst[4] = {};
+    int sure = 0, unsure = 0;
+    const auto check = [&](const std::vector<vec3>& points, int axis, float sign, const char* where) {
+      for (int pass = 0; pass < 4; ++pass) {
+        RibbonWindingBatch<512> batch;
+        for (const vec3& x : points) batch.add(x);
+        batch.evaluate(v.ribbons, betas[pass], axis, sign);
+        for (int j = 0; j < int(points.size()); ++j) {
+          const vec3& x = points[j];
+          const float lu[1] = {x[(axis + 1) % 3]}, lv[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
+          int mesh_jumps[1][1];
+          jumps_along_axis_lattice(v.triangles, lu, lv, along, axis, sign, mesh_jumps);
+          const float w = batch.crossing_winding(j, mesh_jumps[0][0]);
+          if (!(w == w)) {
+            ++unsure;
+            continue;
+          }
+          ++sure;
+          const double exact = winding_number_by_ribbons(v, x);
+          worst[pass] = std::max(worst[pass], float(std::fabs(w - exact)));
+          ASSERT_NEAR(w, exact, tolerances[pass]) << name << " " << where << " point " << j << " beta " << betas[pass];
+        }
+      }
+    };
+    for (int block = 0; block < 12; ++block) {
+      uint32_t s;
+      const float h = diagonal / 256.0f;
+      const vec3 origin = segment_point(s) - u(rng) * 8.0f * h * vec3(1.0f);
+      std::vector<vec3> points;
+      for (int k = 0; k < 512; ++k) points.push_back(origin + h * vec3(float(k % 8), float(k / 8 % 8), float(k / 64)));
+      check(points, int(rng() % 3), rng() % 2 ? 1.0f : -1.0f, "block by the rim");
+    }
+    for (int ribbon = 0; ribbon < 40; ++ribbon) {  // on a segment's ribbon and beside it
+      uint32_t s;
+      const vec3 on = segment_point(s);
+      const int axis = int(rng() % 3);
+      const float sign = rng() % 2 ? 1.0f : -1.0f;
+      vec3 behind = on;
+      behind[axis] -= sign * u(rng) * 0.1f * diagonal;  // the ray from it runs into the segment
+      const vec3 e = v.boundary.endpoints[2 * s + 1] - v.boundary.endpoints[2 * s];
+      vec3 d(0.0f);
+      d[axis] = 1.0f;
+      const vec3 n = glm::normalize(glm::cross(e, d));
+      std::vector<vec3> points;
+      for (const float offset : {0.0f, 1e-7f, -1e-7f, 1e-5f, -1e-5f, 1e-3f, -1e-3f, 1e-2f})
+        points.push_back(behind + offset * diagonal * n);
+      check(points, axis, sign, "by a ribbon");
+    }
+    std::printf("%s: %d sure, %d unsure; largest errors %.1e %.1e %.1e %.1e\n", name, sure, unsure, worst[0], worst[1],
+                worst[2], worst[3]);
+    EXPECT_LT(unsure, sure / 50) << name;
+    // ∇w: the Biot–Savart sum over the segments, within a relative 1e-2 of the crossing method's
+    // at its derivatives' beta (the normals' allowance, as the cone batch's test).
+    float worst_gradient = 0.0f;
+    for (int block = 0; block < 12; ++block) {
+      uint32_t s;
+      const vec3 origin = segment_point(s);
+      const float h = diagonal / 256.0f;
+      RibbonWindingBatch<512, true> batch;
+      std::vector<vec3> points;
+      for (int k = 0; k < 300; ++k) {
+        const vec3 dir = glm::normalize(vec3(u(rng), u(rng), u(rng)) - vec3(0.5f));
+        points.push_back(origin + (0.5f + 7.5f * u(rng)) * h * dir);
+        batch.add(points.back());
+      }
+      batch.evaluate(v.ribbons, 3.0f, -1, 1.0f);
+      for (int j = 0; j < int(points.size()); ++j) {
+        const vec3 reference = winding_number_crossing<true, false>(v, points[j], kConeDerivativeBeta).gradient;
+        const vec3 g = batch.winding_gradient(j);
+        ASSERT_TRUE(g == g) << name << " point " << j;
+        worst_gradient = std::max(worst_gradient, glm::length(g - reference) / glm::length(reference));
+      }
+    }
+    std::printf("%s: gradient's largest relative error %.2e\n", name, worst_gradient);
+    EXPECT_LT(worst_gradient, 1e-2f) << name;
+  }
+}
+#endif
+
 }  // namespace
 }  // namespace gwnrt

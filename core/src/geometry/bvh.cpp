@@ -24,8 +24,8 @@ struct Range {
 
 class Builder {
  public:
-  Builder(std::span<const Aabb> bounds, uint32_t max_leaf, WideBvh& out)
-      : bounds_(bounds), max_leaf_(std::max<uint32_t>(1, max_leaf)), out_(out) {
+  Builder(std::span<const Aabb> bounds, uint32_t max_leaf, std::span<const uint32_t> groups, WideBvh& out)
+      : bounds_(bounds), groups_(groups), max_leaf_(std::max<uint32_t>(1, max_leaf)), out_(out) {
     const size_t n = bounds.size();
     centroids_.resize(n);
     out_.primitive_order.resize(n);
@@ -34,6 +34,21 @@ class Builder {
       out_.primitive_order[i] = uint32_t(i);
     }
     out_.nodes.resize(std::max<size_t>(1, n));
+    if (groups.empty()) return;
+    // Each group's centroid: the mean of its primitives'.
+    std::vector<dvec3> sum;
+    std::vector<uint32_t> count;
+    for (size_t i = 0; i < n; ++i) {
+      if (groups[i] >= sum.size()) {
+        sum.resize(groups[i] + 1, dvec3(0.0));
+        count.resize(groups[i] + 1, 0);
+      }
+      sum[groups[i]] += dvec3(centroids_[i]);
+      ++count[groups[i]];
+    }
+    group_centroids_.resize(sum.size());
+    for (size_t g = 0; g < sum.size(); ++g)
+      group_centroids_[g] = count[g] > 0 ? vec3(sum[g] / double(count[g])) : vec3(0.0f);
   }
 
   bool run() {
@@ -58,8 +73,31 @@ class Builder {
                                 });
   }
 
+  // With groups: r ordered by its groups' centroids along their box's longest axis, each group's
+  // primitives in their own order, and split at the group boundary nearest the median, or within
+  // the one group r holds at its median.
+  uint32_t group_split(Range r) {
+    uint32_t* order = out_.primitive_order.data();
+    Aabb box;
+    for (uint32_t i = r.begin; i < r.end; ++i) box.extend(group_centroids_[groups_[order[i]]]);
+    const vec3 extent = box.hi - box.lo;
+    const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
+    std::sort(order + r.begin, order + r.end, [&](uint32_t a, uint32_t b) {
+      const float ka = group_centroids_[groups_[a]][axis], kb = group_centroids_[groups_[b]][axis];
+      return ka != kb ? ka < kb : (groups_[a] != groups_[b] ? groups_[a] < groups_[b] : a < b);
+    });
+    const uint32_t mid = r.begin + r.size() / 2;
+    const auto boundary = [&](uint32_t i) { return groups_[order[i - 1]] != groups_[order[i]]; };
+    for (uint32_t step = 0; step < r.size(); ++step) {  // the nearest boundary, below first (mid > r.begin)
+      if (step < mid - r.begin && boundary(mid - step)) return mid - step;
+      if (mid + step < r.end && boundary(mid + step)) return mid + step;
+    }
+    return mid;  // one group
+  }
+
   // Splits r at its median along the longest axis of its centroids' box.
   uint32_t median_split(Range r) {
+    if (!groups_.empty()) return group_split(r);
     const Aabb box = centroid_bounds(r);
     const vec3 extent = box.hi - box.lo;
     const int axis = extent.x >= extent.y ? (extent.x >= extent.z ? 0 : 2) : (extent.y >= extent.z ? 1 : 2);
@@ -134,6 +172,8 @@ class Builder {
   }
 
   std::span<const Aabb> bounds_;
+  std::span<const uint32_t> groups_;
+  std::vector<vec3> group_centroids_;
   uint32_t max_leaf_;
   WideBvh& out_;
   std::vector<vec3> centroids_;
@@ -144,11 +184,15 @@ class Builder {
 
 }  // namespace
 
-Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out) {
+Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out,
+                      std::span<const uint32_t> groups) {
   WideBvh bvh;
+  if (!groups.empty() && groups.size() != primitive_bounds.size())
+    return {StatusCode::kInvalidArgument, "BVH build: " + std::to_string(groups.size()) + " groups for " +
+                                              std::to_string(primitive_bounds.size()) + " primitives"};
   if (primitive_bounds.size() > size_t(std::numeric_limits<uint32_t>::max()))
     return {StatusCode::kInvalidArgument, "BVH build: more than 2^32 - 1 primitives"};
-  if (!primitive_bounds.empty() && !Builder(primitive_bounds, max_leaf_size, bvh).run())
+  if (!primitive_bounds.empty() && !Builder(primitive_bounds, max_leaf_size, groups, bvh).run())
     return {StatusCode::kInternal, "BVH build: deeper than kMaxBvhDepth (" + std::to_string(kMaxBvhDepth) + ")"};
   out = std::move(bvh);
   return Status::Ok();

@@ -178,6 +178,7 @@ Status GwnModel::build_boundary() const {
   const BuildOptions& options = deferral_->options;
   boundary_ = extract_boundary(mesh_);
   if (Status s = build_segment_tree(boundary_.endpoints, options.max_leaf_segments, boundary_tree_); !s.ok()) return s;
+  if (Status s = build_ribbon_tree(boundary_.endpoints, options.max_leaf_segments, ribbon_tree_); !s.ok()) return s;
   uint32_t loop_count = 0;
   const std::vector<uint32_t> loop_of_segment = boundary_loops(boundary_, loop_count);
   const Cone cone = boundary_cone(boundary_, loop_of_segment, loop_count);
@@ -187,6 +188,7 @@ Status GwnModel::build_boundary() const {
   smooth_regions_ = group_smooth_regions(cone, loop_count);
   ModelView v = view();  // the boundary's part is not marked built yet
   v.boundary = boundary_tree_.view();
+  v.ribbons = ribbon_tree_.view();
   v.cone = cone_.view();
   crossing_work_ratio_ = sample_crossing_work_ratio(v);
   timings_.boundary_seconds = seconds_since(t0);
@@ -304,6 +306,7 @@ ModelView GwnModel::view() const {
   v.surface_margin = surface_margin_;
   if (built & kPartBoundary) {
     v.boundary = boundary_tree_.view();
+    v.ribbons = ribbon_tree_.view();
     v.cone = cone_.view();
     v.cone_boundary_lengths = cone_lengths_.data();
     v.cone_segments = cone_segments_.data();

@@ -296,8 +296,11 @@ inline constexpr float kConeBatchPlaneTolerance = 1e-4f;
 // cancel between the triangles sharing it) has its triangle taken in double.
 inline constexpr float kBatchGradientConditioning = 1e-2f;
 
-template <int Capacity, bool WantGradient = false>
-struct ConeWindingBatch {
+// The points of a batch (ConeWindingBatch, RibbonWindingBatch), eight to a chunk, and what is
+// summed at them: Ω (w_C, or the ribbons' w before M's jumps), ∇Ω when asked, and whether each is
+// unsure.
+template <int Capacity, bool WantGradient>
+struct WindingBatchPoints {
   static constexpr int kChunks = (Capacity + 7) / 8;
   f8 x[kChunks], y[kChunks], z[kChunks];
   f8 omega[kChunks];
@@ -321,72 +324,50 @@ struct ConeWindingBatch {
   // Whether point i has a value.
   GWNRT_FORCEINLINE bool sure(int i) const { return !unsure[i / 8][i % 8]; }
 
-  // w_C at point i, or NaN where it is unsure.
+  // Ω / 4π at point i, or NaN where it is unsure.
   GWNRT_FORCEINLINE float winding(int i) const {
     return sure(i) ? omega[i / 8][i % 8] * float(0.25 * kInvPi) : __builtin_nanf("");
   }
 
-  // w at point i from the jumps of the cone and of M ahead of it along the caller's ray
-  // (detail::crossing_winding's sum), or NaN where it is unsure.
-  GWNRT_FORCEINLINE float crossing_winding(int i, int cone_jumps, int mesh_jumps) const {
-    return float(cone_jumps - mesh_jumps) + winding(i);
-  }
-
-  // ∇w_C at point i (WantGradient), or NaN where it is unsure.
+  // ∇Ω / 4π at point i (WantGradient), or NaN where it is unsure.
   GWNRT_FORCEINLINE vec3 winding_gradient(int i) const requires WantGradient {
     if (!sure(i)) return vec3(__builtin_nanf(""));
     return vec3(gradient[0][i / 8][i % 8], gradient[1][i / 8][i % 8], gradient[2][i / 8][i % 8]) * float(0.25 * kInvPi);
   }
 
-  // axis: that of the rays along which the caller counts the cone's jumps, or -1 where it needs
-  // none (∇w alone: no point is then unsure for its side of a triangle).
-  void evaluate(const TriangleTreeView& cone, float beta, int axis) {
-    const int kx = axis < 0 ? -1 : (axis + 1) % 3, ky = (axis + 2) % 3;
-    if (count == 0) return;
+  // Before a traversal: the last chunk's unused lanes repeat its first point (finite; never
+  // read), and the points' box. Returns the number of chunks.
+  GWNRT_FORCEINLINE int prepare(vec3& lo, vec3& hi) {
     const int chunks = (count + 7) / 8;
-    // The last chunk's unused lanes repeat its first point (finite; never read).
     for (int l = count % 8; l != 0 && l < 8; ++l) {
       x[chunks - 1][l] = x[chunks - 1][0];
       y[chunks - 1][l] = y[chunks - 1][0];
       z[chunks - 1][l] = z[chunks - 1][0];
     }
-    vec3 lo(kInfinity), hi(-kInfinity);
+    lo = vec3(kInfinity);
+    hi = vec3(-kInfinity);
     for (int c = 0; c < chunks; ++c)
       for (int l = 0; l < 8; ++l) {
         lo = glm::min(lo, vec3(x[c][l], y[c][l], z[c][l]));
         hi = glm::max(hi, vec3(x[c][l], y[c][l], z[c][l]));
       }
-    const float diagonal = glm::length(hi - lo);
-    if (cone.bvh.node_count == 0) return;
-    const float inner_scale2 = beta * beta;
-    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
-    uint32_t stack[kTraversalStackSize];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-      const uint32_t ni = stack[--sp];
-      const WideNode& node = cone.bvh.nodes[ni];
-      const WideNodeExpansion& ex = cone.expansion[ni];
-      for (int lane = 0; lane < kBvhWidth; ++lane) {
-        if (node.child[lane] == kEmptyLane) continue;
-        const vec3 centre(ex.centre[0][lane], ex.centre[1][lane], ex.centre[2][lane]);
-        const vec3 gap = glm::max(glm::max(lo - centre, centre - hi), vec3(0.0f));
-        const float scale2 = node.count[lane] == 0 ? inner_scale2 : leaf_scale2;
-        if (glm::dot(gap, gap) > scale2 * ex.radius[lane] * ex.radius[lane]) {
-          far(cone, ni, lane, centre, chunks);
-        } else if (node.count[lane] == 0) {
-          stack[sp++] = node.child[lane];
-        } else {
-          for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)
-            near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], diagonal, kx, ky, chunks);
-        }
-      }
-    }
+    return chunks;
   }
 
-  GWNRT_FORCEINLINE void far(const TriangleTreeView& cone, uint32_t node, int lane, const vec3& centre, int chunks) {
+  // Whether lane `lane` of a node is beyond beta radii of the points' box [lo, hi]
+  // (inner_scale2 = beta², leaf_scale2 for leaves); its expansion centre in `centre`.
+  static GWNRT_FORCEINLINE bool lane_far(const WideNode& node, const WideNodeExpansion& ex, int lane, const vec3& lo,
+                                         const vec3& hi, float inner_scale2, float leaf_scale2, vec3& centre) {
+    centre = vec3(ex.centre[0][lane], ex.centre[1][lane], ex.centre[2][lane]);
+    const vec3 gap = glm::max(glm::max(lo - centre, centre - hi), vec3(0.0f));
+    const float scale2 = node.count[lane] == 0 ? inner_scale2 : leaf_scale2;
+    return glm::dot(gap, gap) > scale2 * ex.radius[lane] * ex.radius[lane];
+  }
+
+  // A far cluster of `tree`: its expansion (and ∇) at every point.
+  GWNRT_FORCEINLINE void far(const TriangleTreeView& tree, uint32_t node, int lane, const vec3& centre, int chunks) {
     const auto lanes = [&](auto field) { return splat<f8>(field(node)[lane]); };
-    const detail::FarLaneMoments<2, f8, decltype(lanes)> m(cone, lanes);
+    const detail::FarLaneMoments<2, f8, decltype(lanes)> m(tree, lanes);
     for (int c = 0; c < chunks; ++c) {
       if constexpr (WantGradient) {
         const FarFieldTerms<2, f8> t(m.n, m.s, m.p, m.e, centre.x - x[c], centre.y - y[c], centre.z - z[c]);
@@ -413,6 +394,51 @@ struct ConeWindingBatch {
     const f8 s = lane_select(ill, f8{}, f / c2);
     for (int k = 0; k < 3; ++k) sum[k] += c[k] * s;
     return ill;
+  }
+};
+
+template <int Capacity, bool WantGradient = false>
+struct ConeWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
+  using Points = WindingBatchPoints<Capacity, WantGradient>;
+  using Points::count, Points::x, Points::y, Points::z, Points::omega, Points::unsure, Points::gradient,
+      Points::winding, Points::add_edge_field;
+
+  // w at point i from the jumps of the cone and of M ahead of it along the caller's ray
+  // (detail::crossing_winding's sum), or NaN where it is unsure.
+  GWNRT_FORCEINLINE float crossing_winding(int i, int cone_jumps, int mesh_jumps) const {
+    return float(cone_jumps - mesh_jumps) + winding(i);
+  }
+
+  // axis: that of the rays along which the caller counts the cone's jumps, or -1 where it needs
+  // none (∇w alone: no point is then unsure for its side of a triangle).
+  void evaluate(const TriangleTreeView& cone, float beta, int axis) {
+    const int kx = axis < 0 ? -1 : (axis + 1) % 3, ky = (axis + 2) % 3;
+    if (count == 0) return;
+    vec3 lo, hi;
+    const int chunks = this->prepare(lo, hi);
+    const float diagonal = glm::length(hi - lo);
+    if (cone.bvh.node_count == 0) return;
+    const float inner_scale2 = beta * beta;
+    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
+    uint32_t stack[kTraversalStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const WideNode& node = cone.bvh.nodes[ni];
+      for (int lane = 0; lane < kBvhWidth; ++lane) {
+        if (node.child[lane] == kEmptyLane) continue;
+        vec3 centre;
+        if (Points::lane_far(node, cone.expansion[ni], lane, lo, hi, inner_scale2, leaf_scale2, centre)) {
+          this->far(cone, ni, lane, centre, chunks);
+        } else if (node.count[lane] == 0) {
+          stack[sp++] = node.child[lane];
+        } else {
+          for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)
+            near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], diagonal, kx, ky, chunks);
+        }
+      }
+    }
   }
 
   GWNRT_FORCEINLINE void near(const vec3& p0, const vec3& p1, const vec3& p2, float diagonal, int kx, int ky,

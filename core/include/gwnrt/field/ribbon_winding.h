@@ -17,6 +17,10 @@ namespace gwnrt {
 // subtends from x the spherical triangle (a, b, c): van Oosterom and Strackee with |c| = 1. Its
 // boundary holds a -> b as a cone triangle (z, a, b) holds it, so the ribbons of ∂M's segments
 // span ∂M as the cone does.
+GWNRT_HD inline SolidAngleTangent<double> ribbon_tangent(const dvec3& a, const dvec3& b, const dvec3& c) {
+  return solid_angle_tangent(a, b, c, glm::length(a), glm::length(b), 1.0, glm::cross(b, c), glm::dot(b, c));
+}
+
 // w at x: the ribbons' solid angles over 4π (swept along −d) less M's jumps ahead of x along the
 // axis ray d that leaves M's box soonest. Exact up to round-off where x is off M. Where x lies on
 // a ribbon (the ray runs into ∂M: a query point in the plane of a planar hole, the ray in that
@@ -34,8 +38,7 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
     bool on_ribbon = false;
     for (uint32_t s = 0; s < m.boundary.segment_count; ++s) {
       const dvec3 a = dvec3(m.boundary.endpoints[2 * s]) - xd, b = dvec3(m.boundary.endpoints[2 * s + 1]) - xd;
-      const SolidAngleTangent<double> t = solid_angle_tangent(a, b, behind, glm::length(a), glm::length(b), 1.0,
-                                                              glm::cross(b, behind), glm::dot(b, behind));
+      const SolidAngleTangent<double> t = ribbon_tangent(a, b, behind);
       on_ribbon = on_ribbon || (t.numerator == 0.0 && t.denominator <= 0.0);
       omega += 2.0 * atan2(t.numerator, t.denominator);
     }
@@ -49,5 +52,116 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
     return omega * (0.25 / kPi) - double(mesh_jumps);
   }
 }
+
+#if GWNRT_HOST_LANES && defined(__AVX__)
+// w at many points at once from the ribbons (the meshing passes' points): one traversal of the
+// ribbon tree for all of them, M's jumps left to the caller. A lane is expanded only where it is
+// beyond beta radii of the points' box and the beam of the points' rays (their box swept along
+// +d) misses it: then no ray meets its fan, and its ribbons sum to the fan (its multipole) plus
+// k_v · ribbon(z → v) at each loose end v (R(a→b) = T(z,a,b) + R(z→b) − R(z→a), the prism they
+// bound holding no point). Every other lane is opened; segments are ribbon terms. ∇w is the
+// Biot–Savart sum over ∂M's segments, taken the same way (the fan's expansion and its spokes
+// z → v at the loose ends), with no ray. Eight points at a time in float, a term where float is
+// ill-conditioned in double (kNearConditioning, as the near triangles); a point on a ribbon is
+// unsure.
+template <int Capacity, bool WantGradient = false>
+struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
+  using Points = WindingBatchPoints<Capacity, WantGradient>;
+  using Points::count, Points::x, Points::y, Points::z, Points::omega, Points::unsure, Points::gradient,
+      Points::winding, Points::add_edge_field;
+
+  // w at point i given M's jumps ahead of it along the ray of evaluate(), or NaN where unsure.
+  GWNRT_FORCEINLINE float crossing_winding(int i, int mesh_jumps) const { return winding(i) - float(mesh_jumps); }
+
+  // The ribbons swept opposite the ray along `axis` with `sign` (w; and ∇w when WantGradient), or
+  // axis -1 for ∇w alone.
+  void evaluate(const RibbonTreeView& ribbons, float beta, int axis, float sign) {
+    if (count == 0) return;
+    vec3 lo, hi;
+    const int chunks = this->prepare(lo, hi);
+    const BvhView& bvh = ribbons.fans.bvh;
+    if (bvh.node_count == 0 || ribbons.segment_count == 0) return;
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const float inner_scale2 = beta * beta;
+    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
+    uint32_t stack[kTraversalStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const WideNode& node = bvh.nodes[ni];
+      const WideNodeFan& fan = ribbons.fan_ends[ni];
+      for (int lane = 0; lane < kBvhWidth; ++lane) {
+        if (node.child[lane] == kEmptyLane) continue;
+        vec3 centre;
+        bool far = fan.end_count[lane] != kOpenFan &&
+                   Points::lane_far(node, ribbons.fans.expansion[ni], lane, lo, hi, inner_scale2, leaf_scale2, centre);
+        if (far && axis >= 0) {  // and the beam misses the lane's box
+          const bool ahead = sign > 0.0f ? node.hi[axis][lane] >= lo[axis] : node.lo[axis][lane] <= hi[axis];
+          far = !(ahead && node.lo[u][lane] <= hi[u] && node.hi[u][lane] >= lo[u] && node.lo[v][lane] <= hi[v] &&
+                  node.hi[v][lane] >= lo[v]);
+        }
+        if (far) {
+          this->far(ribbons.fans, ni, lane, centre, chunks);
+          const vec3 apex(fan.apex[0][lane], fan.apex[1][lane], fan.apex[2][lane]);
+          for (uint32_t e = fan.first_end[lane]; e < fan.first_end[lane] + fan.end_count[lane]; ++e)
+            segment(apex, ribbons.loose_ends[e].position, ribbons.loose_ends[e].multiplicity, axis, sign, chunks);
+        } else if (node.count[lane] == 0) {
+          stack[sp++] = node.child[lane];
+        } else {
+          for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s)
+            segment(ribbons.endpoints[2 * s], ribbons.endpoints[2 * s + 1], 1.0f, axis, sign, chunks);
+        }
+      }
+    }
+  }
+
+  // `multiplicity` times segment p -> q's ribbon (axis >= 0) and its Biot–Savart term (WantGradient).
+  GWNRT_FORCEINLINE void segment(const vec3& p, const vec3& q, float multiplicity, int axis, float sign, int chunks) {
+    for (int c = 0; c < chunks; ++c) {
+      const f8 a[3] = {p.x - x[c], p.y - y[c], p.z - z[c]}, b[3] = {q.x - x[c], q.y - y[c], q.z - z[c]};
+      const f8 la = lane_sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      const f8 lb = lane_sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+      if (axis >= 0) {
+        // Van Oosterom–Strackee for (a, b, c), c = −sign · e_axis: a·(b × c) = c·(a × b).
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const float c_axis = -sign;
+        const f8 numerator = c_axis * (a[u] * b[v] - a[v] * b[u]);
+        const f8 ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        const f8 denominator = solid_angle_denominator(la, lb, f8{} + 1.0f, ab, c_axis * b[axis], c_axis * a[axis]);
+        f8 angle = lane_atan2(numerator, denominator);
+        // Where float is ill-conditioned (the ray passes near the segment or an endpoint), the
+        // term in double; x on the ribbon itself is unsure (Ω jumps by 4π there).
+        const uint32_t ill = lane_bits(point_on_triangle(numerator, denominator, la * lb, kNearConditioning));
+        for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
+          const int l = lowest_set_bit(rest);
+          const dvec3 xd(x[c][l], y[c][l], z[c][l]), pd = dvec3(p) - xd, qd = dvec3(q) - xd;
+          dvec3 behind(0.0);
+          behind[axis] = c_axis;
+          const SolidAngleTangent<double> exact = ribbon_tangent(pd, qd, behind);
+          unsure[c][l] |= point_on_triangle(exact.numerator, exact.denominator, glm::length(pd) * glm::length(qd),
+                                            kOnTriangleRoundOff)
+                              ? -1
+                              : 0;
+          angle[l] = float(atan2(exact.numerator, exact.denominator));
+        }
+        omega[c] += (2.0f * multiplicity) * angle;
+      }
+      if constexpr (WantGradient) {
+        f8 edge[3] = {};
+        const uint32_t ill = lane_bits(add_edge_field(a, b, la, lb, edge));
+        for (int k = 0; k < 3; ++k) gradient[k][c] += multiplicity * edge[k];
+        for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {  // near the segment's line: in double
+          const int l = lowest_set_bit(rest);
+          const dvec3 xd(x[c][l], y[c][l], z[c][l]);
+          const vec3 exact = detail::saturated_float(
+              detail::EdgeField<double>(dvec3(p) - xd, dvec3(q) - xd).gradient() * double(multiplicity));
+          for (int k = 0; k < 3; ++k) gradient[k][c][l] += exact[k];
+        }
+      }
+    }
+  }
+};
+#endif
 
 }  // namespace gwnrt

@@ -100,6 +100,33 @@ struct SegmentTreeView {
   const WideNodeLength* lengths = nullptr;  // per node, parallel to bvh.nodes
 };
 
+// Per lane of ∂M's segment tree, for the ribbons (field/ribbon_winding.h): the apex z of the fan
+// over the segments below (a loose end of them, or any endpoint when they close), and their other
+// loose ends, RibbonTreeView::loose_ends[first_end, first_end + end_count), or end_count
+// kOpenFan where they have more than kMaxLooseEnds (the lane is then never expanded).
+inline constexpr uint32_t kMaxLooseEnds = 8;
+inline constexpr uint32_t kOpenFan = 0xFFFFFFFFu;
+struct alignas(16) WideNodeFan {
+  float apex[3][kBvhWidth];
+  uint32_t first_end[kBvhWidth];
+  uint32_t end_count[kBvhWidth];
+};
+// A loose end v of a lane's segments: multiplicity = (segments ending at v) − (starting at v).
+struct LooseEnd {
+  vec3 position;
+  float multiplicity;
+};
+
+// ∂M's segments clustered for the ribbons: the segment tree's BVH with, per lane, the fan's moments
+// (a triangle cluster's: `fans`, whose vertices are unused) and its loose ends.
+struct RibbonTreeView {
+  TriangleTreeView fans;                  // bvh: the segment tree's; expansion, order1, order2: the fans'
+  const WideNodeFan* fan_ends = nullptr;  // per node, parallel to fans.bvh.nodes
+  const LooseEnd* loose_ends = nullptr;
+  const vec3* endpoints = nullptr;  // 2 per segment, in the segment tree's leaf order
+  uint32_t segment_count = 0;
+};
+
 struct Aabb {
   vec3 lo{3.4e38f};
   vec3 hi{-3.4e38f};
@@ -126,7 +153,10 @@ struct WideBvh {
   BvhView view() const { return {nodes.data(), uint32_t(nodes.size())}; }
 };
 
-Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out);
+// With `groups` (a group per primitive: chains, each given in its order), the splits keep groups
+// whole while a range holds more than one, and cut one only into runs of consecutive primitives.
+Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_size, WideBvh& out,
+                      std::span<const uint32_t> groups = {});
 
 // Per node, the total of length_of(primitive in leaf order) below each lane: bottom-up in double
 // (a long curve of short segments would lose its tail in float), each lane's float rounded up so

@@ -54,6 +54,9 @@ enum ModelPart : uint32_t {
 struct ModelView {
   TriangleTreeView triangles;  // M
   SegmentTreeView boundary;    // ∂M
+  // ∂M's segments clustered for the ribbons' exact w (field/ribbon_winding.h), over `boundary`'s
+  // BVH. Host only: the device's view leaves it empty.
+  RibbonTreeView ribbons;
   // The cone C over ∂M (boundary_cone): a triangle (z, a, b) for each boundary segment a→b, z its
   // loop's mean or its group's in a spanned loop, and the spanned loops' inner triangles. M − C
   // is closed, so w − w_C is an integer off M ∪ C and w mod 1 = w_C mod 1 (docs/design.md §3):

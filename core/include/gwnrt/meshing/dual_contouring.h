@@ -10,6 +10,7 @@
 #include "gwnrt/field/box_winding.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/field/evaluate_winding.h"
+#include "gwnrt/field/ribbon_winding.h"
 #include "gwnrt/geometry/exact_predicates.h"
 #include "gwnrt/geometry/model_view.h"
 #include "gwnrt/meshing/cell_topology.h"
@@ -69,21 +70,21 @@ GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, int
   return jumps[0][0];
 }
 
-// Below this many points a batch is not worth its traversal of the cone for the points' box
-// (about a few single sums): they are summed one by one.
+// Below this many points a batch is not worth its traversal of the ribbon tree for the points'
+// box (about a few single sums): they are summed one by one.
 inline constexpr int kMinConeBatch = 4;
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // taylor_point at n <= 8 points, each along its own ray (axis[k], sign[k]): those that share a
-// ray from one batched traversal of the cone (ŵ = w_C plus the cone's jumps ahead, each from a
-// walk of its own; ∇w = ∇w_C), the others and those the batch is unsure of one by one. ok[k]:
-// taylor_point's result.
+// ray from one batched traversal of the ribbon tree (ŵ: the ribbons swept opposite that ray,
+// which is w plus M's jumps ahead; ∇w), the others and those the batch is unsure of one by one.
+// ok[k]: taylor_point's result.
 inline void taylor_points(const ModelView& model, const vec3* x, const int* axis, const float* sign, int n,
                           TaylorPoint* out, bool* ok) {
   uint32_t pending = (1u << n) - 1u;
   while (pending != 0) {  // one batch for each ray among them
     const int first = lowest_set_bit(pending);
-    ConeWindingBatch<8, true> batch;
+    RibbonWindingBatch<8, true> batch;
     int in_batch[8];
     for (uint32_t rest = pending; rest != 0; rest &= rest - 1) {
       const int k = lowest_set_bit(rest);
@@ -93,11 +94,11 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
       batch.add(x[k]);
     }
     const bool batched = batch.count >= kMinConeBatch;
-    if (batched) batch.evaluate(model.cone, kTaylorPointBeta, axis[first]);
+    if (batched) batch.evaluate(model.ribbons, kTaylorPointBeta, axis[first], sign[first]);
     for (int j = 0; j < batch.count; ++j) {
       const int k = in_batch[j];
       if (batched) {
-        out[k].w_hat = batch.crossing_winding(j, jumps_ahead(model.cone, x[k], axis[k], sign[k]), 0);
+        out[k].w_hat = batch.winding(j);
         out[k].gradient = batch.winding_gradient(j);
       }
       ok[k] = (batched && out[k].finite()) || taylor_point(model, x[k], axis[k], sign[k], out[k]);
@@ -189,7 +190,7 @@ GWNRT_HD inline bool corner_needed(uint32_t needed_from, const GridCoord& local)
 }
 
 // The corners need w exactly only where its sign is in doubt: a column is first evaluated with
-// the cone's clusters expanded beyond kCornerScreenBeta radii, the corners within
+// the ribbon tree's clusters expanded beyond kCornerScreenBeta radii, the corners within
 // kCornerScreenMargin of the level again beyond kCornerRefineBeta, and only those within
 // kCornerRefineMargin of it at the crossing method's own beta. The screen's error stayed below
 // 1.7e-3 at beta 1.5 on every real and bundled open mesh at 256³ (the scan's rims; 5.2e-4 at 2),
@@ -355,9 +356,8 @@ struct BlockWindingPass {
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
   // The blocks of a 2 × 2 × 2 group at once, by the group's first slot (the others do nothing):
-  // their centres from one batched traversal of the cone for each ray among them (ŵ = w_C plus
-  // the cone's jumps ahead along the block's ray, each from a walk of its own; ∇w = ∇w_C), as
-  // taylor_point gives them; a centre the batch is unsure of takes taylor_point. Slots are in
+  // their centres from one batched traversal of the ribbon tree for each ray among them
+  // (taylor_points), as taylor_point gives them; a centre the batch is unsure of takes taylor_point. Slots are in
   // block order, so the group's first slot is its first block's.
   void group(uint64_t slot) const {
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
@@ -397,29 +397,21 @@ struct BlockWindingPass {
     for (int i = 0; i < members; ++i) finish(member[i], member_block[i]);
   }
 
-  // The centres of the eighths in `wanted` from one batched traversal of the cone (ŵ = w_C plus
-  // the cone's jumps ahead along the block's ray, from a walk of the eighths' 2 × 2 lattice of
-  // lines; ∇w = ∇w_C), as taylor_point gives them; one the batch is unsure of takes taylor_point.
+  // The centres of the eighths in `wanted` from one batched traversal of the ribbon tree (ŵ: the
+  // ribbons swept opposite the block's ray, which is w plus M's jumps ahead; ∇w), as taylor_point
+  // gives them; one the batch is unsure of takes taylor_point.
   void batch_centres(const GridCoord& b, uint32_t wanted, BlockWinding& w) const {
-    const int u = (w.axis + 1) % 3, v = (w.axis + 2) % 3;
-    const vec3 low = eighth_box(b, 0).centre(), high = eighth_box(b, 7).centre();
-    const float cu[2] = {low[u], high[u]}, cv[2] = {low[v], high[v]};
-    const float along[2] = {w.sign > 0.0f ? low[w.axis] : high[w.axis], w.sign > 0.0f ? high[w.axis] : low[w.axis]};
-    int cone_jumps[4][2];
-    jumps_along_axis_lattice(model.cone, cu, cv, along, w.axis, w.sign, cone_jumps);
-    ConeWindingBatch<8, true> batch;
+    RibbonWindingBatch<8, true> batch;
     int eighth[8];
     for (uint32_t rest = wanted; rest != 0; rest &= rest - 1) {
       eighth[batch.count] = lowest_set_bit(rest);
       batch.add(eighth_box(b, eighth[batch.count]).centre());
     }
-    batch.evaluate(model.cone, kEighthPointBeta, w.axis);
+    batch.evaluate(model.ribbons, kEighthPointBeta, w.axis, w.sign);
     for (int j = 0; j < batch.count; ++j) {
       const int i = eighth[j];
-      const int l[3] = {i & 1, (i >> 1) & 1, i >> 2};
-      const int k = w.sign > 0.0f ? l[w.axis] : 1 - l[w.axis];
       TaylorPoint& p = w.point[1 + i];
-      p.w_hat = batch.crossing_winding(j, cone_jumps[l[u] + 2 * l[v]][k], 0);
+      p.w_hat = batch.winding(j);
       p.gradient = batch.winding_gradient(j);
       if (p.finite() || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p, kEighthPointBeta))
         w.mid |= 1u << i;
@@ -609,11 +601,10 @@ struct CornerColumnPass {
 };
 
 // Per slot, after CornerColumnPass with defer_cone_sums: the corners it left (deferred_corner)
-// screened together, the cone's jumps ahead of them from one walk of its tree along the slot's
-// lattice and w_C from one traversal for all of them (ConeWindingBatch, at kCornerScreenBeta),
-// those within kCornerScreenMargin of the level refined as another batch, the exact sums nearer
-// the level one by one (corner_winding_value's steps). A corner the batch is unsure of, or a
-// slot with few, takes corner_winding_value.
+// screened together, their ribbons (swept opposite the slot's ray) from one traversal for all
+// of them (RibbonWindingBatch, at kCornerScreenBeta) less M's jumps ahead, those within kCornerScreenMargin of the
+// level refined as another batch, the exact sums nearer the level one by one (corner_winding_value's steps). A corner
+// the batch is unsure of, or a slot with few, takes corner_winding_value.
 struct CornerBatchPass {
   SparseGridView view;
   ModelView model;
@@ -653,25 +644,16 @@ struct CornerBatchPass {
   // The deferred corners [deferred, deferred + count) of block b screened as one batch, those
   // within kCornerScreenMargin of the level refined as another, each finished one by one.
   void batch_sums(const GridCoord& b, const CornerRay& ray, const uint16_t* deferred, int count, float* out) const {
-    int cone_jumps[kBlockCells * kBlockCells][kBlockCells];
-    block_jumps(model.cone, view.grid, b, ray.axis, ray.sign, cone_jumps);
-    // w at deferred corner i, the batch's j-th point, M's jumps ahead of it `jumps`: NaN where
-    // the batch is unsure.
-    const auto batch_winding = [&](const ConeWindingBatch<kBlockItems>& batch, int j, uint32_t i, int jumps) {
-      int k;
-      const uint32_t column = corner_column(local_coord(i), ray.axis, ray.sign, k);
-      return batch.crossing_winding(j, cone_jumps[column][k], jumps);
-    };
-    ConeWindingBatch<kBlockItems> batch;
+    RibbonWindingBatch<kBlockItems> batch;
     for (int j = 0; j < count; ++j) batch.add(position(b, deferred[j]));
-    batch.evaluate(model.cone, kCornerScreenBeta, ray.axis);
+    batch.evaluate(model.ribbons, kCornerScreenBeta, ray.axis, ray.sign);
     uint16_t near_level[kBlockItems];
     float near_value[kBlockItems];
     int near_count = 0, jumps;
     for (int j = 0; j < count; ++j) {
       const uint32_t i = deferred[j];
       is_deferred_corner(out[i], jumps);
-      const float screened = batch_winding(batch, j, i, jumps);
+      const float screened = batch.crossing_winding(j, jumps);
       if (!(screened == screened)) {
         out[i] = corner_winding_value(model, position(b, i), ray.axis, ray.sign, jumps, level) - level;
       } else if (fabsf(screened - level) < kCornerScreenMargin) {
@@ -685,7 +667,7 @@ struct CornerBatchPass {
     if (refine_in_batch) {
       batch.count = 0;
       for (int j = 0; j < near_count; ++j) batch.add(position(b, near_level[j]));
-      batch.evaluate(model.cone, kCornerRefineBeta, ray.axis);
+      batch.evaluate(model.ribbons, kCornerRefineBeta, ray.axis, ray.sign);
     }
     uint16_t nearer[kBlockItems];  // those within kCornerRefineMargin: the exact method's beta
     int nearer_jumps[kBlockItems], nearer_count = 0;
@@ -693,7 +675,7 @@ struct CornerBatchPass {
       const uint32_t i = near_level[j];
       const vec3 x = position(b, i);
       is_deferred_corner(out[i], jumps);
-      const float refined = refine_in_batch ? batch_winding(batch, j, i, jumps) : __builtin_nanf("");
+      const float refined = refine_in_batch ? batch.crossing_winding(j, jumps) : __builtin_nanf("");
       if (refined == refined && fabsf(refined - level) < kCornerRefineMargin) {
         nearer_jumps[nearer_count] = jumps;
         nearer[nearer_count++] = uint16_t(i);
@@ -708,11 +690,11 @@ struct CornerBatchPass {
     if (exact_in_batch) {
       batch.count = 0;
       for (int j = 0; j < nearer_count; ++j) batch.add(position(b, nearer[j]));
-      batch.evaluate(model.cone, kConeBeta, ray.axis);
+      batch.evaluate(model.ribbons, kConeBeta, ray.axis, ray.sign);
     }
     for (int j = 0; j < nearer_count; ++j) {
       const uint32_t i = nearer[j];
-      const float exact = exact_in_batch ? batch_winding(batch, j, i, nearer_jumps[j]) : __builtin_nanf("");
+      const float exact = exact_in_batch ? batch.crossing_winding(j, nearer_jumps[j]) : __builtin_nanf("");
       out[i] = (exact == exact ? exact
                                : winding_from_mesh_jumps(model, position(b, i), ray.axis, ray.sign, nearer_jumps[j])) -
                level;
@@ -848,7 +830,7 @@ struct WalkBatchPass {
     const ModelView& model = walks.model;
     const CornerRay ray = corner_ray(walks.view, model, walks.winding, walks.block_winding, uint32_t(slot));
     HermitePoint* hermite = walks.hermite;
-    ConeWindingBatch<kBlockItems> batch;
+    RibbonWindingBatch<kBlockItems> batch;
     uint64_t index[kBlockItems];
     EdgeValues values[kBlockItems];
     for (uint64_t i = first; i < end;) {
@@ -868,16 +850,15 @@ struct WalkBatchPass {
           }
         if (batch.count == 0) break;
         const bool batched = batch.count >= kMinConeBatch;
-        if (batched) batch.evaluate(model.cone, kRootSearchConeBeta, ray.axis);
+        if (batched) batch.evaluate(model.ribbons, kRootSearchConeBeta, ray.axis, ray.sign);
         for (int a = 0; a < batch.count; ++a) {
           const int j = active[a];
           const vec3 x = hermite[index[j]].point;
           const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
           values[j].value[values[j].count++] =
-              w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray.axis, ray.sign),
-                                                        jumps_ahead(model.triangles, x, ray.axis, ray.sign)) -
-                                     walks.level
-                               : root_search_value(model, x, walks.level);
+              w_cone == w_cone
+                  ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - walks.level
+                  : root_search_value(model, x, walks.level);
           hermite[index[j]] = walks.walk(index[j], &values[j]);
         }
       }
@@ -887,9 +868,9 @@ struct WalkBatchPass {
 #endif
 
 // Per slot, after HermitePass with defer_roots: the searches of its edges' smooth roots
-// (root_deferred) stepped together, each step's points as one batch of cone sums at
-// kRootSearchConeBeta (ConeWindingBatch; M's and the cone's jumps ahead along the slot's ray
-// from each point's own walks), a point the batch is unsure of by winding_number_crossing as the
+// (root_deferred) stepped together, each step's points as one batch of ribbon sums at
+// kRootSearchConeBeta (RibbonWindingBatch; M's jumps ahead along the slot's ray from each
+// point's own walk), a point the batch is unsure of by winding_number_crossing as the
 // search one by one takes it. The normals stay deferred (NormalBatchPass).
 struct RootBatchPass {
   SparseGridView view;
@@ -918,7 +899,7 @@ struct RootBatchPass {
     slot_edges(edges, edge_count, slot, first, end);
 #if GWNRT_HOST_LANES && defined(__AVX__)
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
-    ConeWindingBatch<kBlockItems> batch;
+    RibbonWindingBatch<kBlockItems> batch;
     uint64_t index[kBlockItems];
     IllinoisBracket bracket[kBlockItems];
     for (uint64_t i = first; i < end;) {
@@ -940,16 +921,14 @@ struct RootBatchPass {
           }
         if (batch.count == 0) break;
         const bool batched = batch.count >= kMinConeBatch;
-        if (batched) batch.evaluate(model.cone, kRootSearchConeBeta, ray.axis);
+        if (batched) batch.evaluate(model.ribbons, kRootSearchConeBeta, ray.axis, ray.sign);
         for (int a = 0; a < batch.count; ++a) {
           const vec3& x = point[a];
           // The jumps' walks only where the batch has a value.
           const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
-          bracket[active[a]].take(w_cone == w_cone
-                                      ? batch.crossing_winding(a, jumps_ahead(model.cone, x, ray.axis, ray.sign),
-                                                               jumps_ahead(model.triangles, x, ray.axis, ray.sign)) -
-                                            level
-                                      : root_search_value(model, x, level));
+          bracket[active[a]].take(
+              w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - level
+                               : root_search_value(model, x, level));
         }
       }
       for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);
@@ -973,8 +952,8 @@ struct RootBatchPass {
 };
 
 // Per slot, after HermitePass with defer_normals: the normals of its edges' smooth roots
-// (normal_deferred) from one batched traversal of the cone for all of them (∇w = ∇w_C,
-// ConeWindingBatch); a root the batch is unsure of takes smooth_root_gradient.
+// (normal_deferred) from one batched traversal of the ribbon tree for all of them (∇w, the
+// Biot–Savart sum over ∂M: RibbonWindingBatch); a root the batch is unsure of takes smooth_root_gradient.
 struct NormalBatchPass {
   ModelView model;
   WindingOptions winding;
@@ -986,7 +965,7 @@ struct NormalBatchPass {
     uint64_t lo, end;
     slot_edges(edges, edge_count, slot, lo, end);
 #if GWNRT_HOST_LANES && defined(__AVX__)
-    ConeWindingBatch<kBlockItems, true> batch;
+    RibbonWindingBatch<kBlockItems, true> batch;
     uint64_t index[kBlockItems];
     for (uint64_t i = lo; i < end;) {
       batch.count = 0;
@@ -999,7 +978,7 @@ struct NormalBatchPass {
         for (int j = 0; j < batch.count; ++j) finish(hermite[index[j]], vec3(__builtin_nanf("")));
         continue;
       }
-      batch.evaluate(model.cone, kHermiteNormalBeta, -1);
+      batch.evaluate(model.ribbons, kHermiteNormalBeta, -1, 1.0f);
       for (int j = 0; j < batch.count; ++j) finish(hermite[index[j]], batch.winding_gradient(j));
     }
 #else

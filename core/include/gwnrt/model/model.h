@@ -14,6 +14,7 @@
 #include "gwnrt/geometry/boundary.h"
 #include "gwnrt/geometry/mesh.h"
 #include "gwnrt/geometry/model_view.h"
+#include "gwnrt/geometry/ribbon_tree.h"
 #include "gwnrt/geometry/segment_tree.h"
 #include "gwnrt/geometry/triangle_tree.h"
 #include "gwnrt/sdf/level_free_cells.h"
@@ -135,6 +136,7 @@ class GwnModel {
   // deferral_->mutex, read only once their bit is set.
   mutable BoundaryCurve boundary_;
   mutable SegmentTree boundary_tree_;
+  mutable RibbonTree ribbon_tree_;
   mutable TriangleTree cone_;
   mutable std::vector<WideNodeLength> cone_lengths_;
   mutable std::vector<ConeSegment> cone_segments_;
