@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "gwnrt/field/crossing_winding.h"
+#include "gwnrt/field/ribbon_winding.h"
 #include "gwnrt/meshing/dual_contouring.h"
 #include "gwnrt/meshing/edge_hermite.h"
 #include "reference/brute_force_winding.h"
@@ -121,27 +122,23 @@ TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {
 }
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
-// The batched cone sums (ConeWindingBatch, with the jumps of M and of the cone from their own
-// lattice walks): w within the screen's and the refinement's expected errors of the exact w
-// wherever the batch is sure, by blocks of corners beside the rims and across the meshes, and at
-// points on, within round-off of and just off cone triangles (where the walks and the solid angle
-// must agree on the side, or the batch must be unsure); ∇w by the rims as the normals take it.
-TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
+// The batched ribbon sums the corners, roots and centres take (RibbonWindingBatch, M's jumps from
+// their own walk): w within each use's allowance of the exact w wherever the batch is sure, by
+// blocks of corners beside the rims (their rays pass by ∂M); ∇w by the rims as the normals take
+// it; the eighths' and the blocks' centres (ŵ and ∇w times their reach) against a far higher beta.
+TEST(MeshingCorners, BatchedRibbonSumsAreWithinTheScreensError) {
   for (const char* name : {"bunny_holes.obj", "teapot.obj", "realworld/birdBath_ggg_photogrammetry.obj"}) {
     const GwnModel model = test::build_model(test::load_test_mesh(name));
     const ModelView view = model.view();
     const BoundaryCurve& rim = model.boundary();
     const float diagonal = glm::length(model.bounds().hi - model.bounds().lo);
+    const float h = diagonal / 256.0f;
     test::Random random(31);
-    int sure = 0, unsure = 0;
-    // w at point j of the batch, or NaN where it is unsure, from its line's jumps.
-    const auto batch_w = [&](float w_cone, const vec3& x, int axis, float sign) {
-      const float u[1] = {x[(axis + 1) % 3]}, v[1] = {x[(axis + 2) % 3]}, along[1] = {x[axis]};
-      int mesh_jumps[1][1], cone_jumps[1][1];
-      jumps_along_axis_lattice(view.triangles, u, v, along, axis, sign, mesh_jumps);
-      jumps_along_axis_lattice(view.cone, u, v, along, axis, sign, cone_jumps);
-      return w_cone + float(cone_jumps[0][0] - mesh_jumps[0][0]);
+    const auto by_the_rim = [&] {
+      const size_t s = size_t(random.index(int(rim.segment_count())));
+      return glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
     };
+    int sure = 0, unsure = 0;
     // The screen's, the refinement's and the centres' betas (the last with ∇w, as the centres
     // take it), each tenfold under what its use allows: the margins of 0.02 and 2e-3 on the
     // corners (dual_contouring.h) and of 1e-3 on ŵ (kBoxWindingMargin); and the exact method's
@@ -149,18 +146,24 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     const float betas[4] = {kCornerScreenBeta, kCornerRefineBeta, kTaylorPointBeta, kConeBeta};
     const float tolerances[4] = {2e-3f, 2e-4f, 1e-4f, 2e-5f};
     float worst[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    const auto check = [&](const std::vector<vec3>& points, int axis, float sign, const char* where) {
+    for (int block = 0; block < 12; ++block) {  // 8³ corners a cell of 1/256 of the box apart
+      const vec3 origin = by_the_rim() - random.uniform(0.0f, 8.0f * h) * vec3(1.0f);
+      std::vector<vec3> points;
+      for (int k = 0; k < 512; ++k) points.push_back(origin + h * vec3(float(k % 8), float(k / 8 % 8), float(k / 64)));
+      const int axis = random.index(3);
+      const float sign = random.index(2) ? 1.0f : -1.0f;
       for (int pass = 0; pass < 4; ++pass) {
-        ConeWindingBatch<512> batch;
-        ConeWindingBatch<512, true> with_gradient;
+        RibbonWindingBatch<512> batch;
+        RibbonWindingBatch<512, true> with_gradient;
         const bool gradient = pass == 2;
         for (const vec3& x : points) (gradient ? with_gradient.add(x) : batch.add(x));
         if (gradient)
-          with_gradient.evaluate(view.cone, betas[pass], axis);
+          with_gradient.evaluate(view.ribbons, betas[pass], axis, sign);
         else
-          batch.evaluate(view.cone, betas[pass], axis);
+          batch.evaluate(view.ribbons, betas[pass], axis, sign);
         for (int j = 0; j < int(points.size()); ++j) {
-          const float w = batch_w(gradient ? with_gradient.winding(j) : batch.winding(j), points[j], axis, sign);
+          const int jumps = jumps_ahead(view.triangles, points[j], axis, sign);
+          const float w = gradient ? with_gradient.crossing_winding(j, jumps) : batch.crossing_winding(j, jumps);
           if (!(w == w)) {
             ++unsure;
             continue;
@@ -168,44 +171,22 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
           ++sure;
           const float exact = winding_number_crossing<false, false>(view, points[j]).w;
           worst[pass] = std::max(worst[pass], std::fabs(w - exact));
-          ASSERT_NEAR(w, exact, tolerances[pass]) << name << " " << where << " point " << j << " beta " << betas[pass];
+          ASSERT_NEAR(w, exact, tolerances[pass]) << name << " point " << j << " beta " << betas[pass];
         }
       }
-    };
-    for (int block = 0; block < 12; ++block) {  // 8³ corners a cell of 1/256 of the box apart
-      const size_t s = size_t(random.index(int(rim.segment_count())));
-      const float h = diagonal / 256.0f;
-      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1)) -
-                          random.uniform(0.0f, 8.0f * h) * vec3(1.0f);
-      std::vector<vec3> points;
-      for (int k = 0; k < 512; ++k) points.push_back(origin + h * vec3(float(k % 8), float(k / 8 % 8), float(k / 64)));
-      check(points, random.index(3), random.index(2) ? 1.0f : -1.0f, "block by the rim");
     }
-    for (int cone_triangle = 0; cone_triangle < 40; ++cone_triangle) {
-      const uint32_t t = uint32_t(random.index(int(view.cone.triangle_count)));
-      const vec3 a = view.cone.vertices[3 * t], b = view.cone.vertices[3 * t + 1], c = view.cone.vertices[3 * t + 2];
-      const vec3 n = glm::normalize(glm::cross(b - a, c - a));
-      const float r0 = random.uniform(0, 1), r1 = random.uniform(0, 1 - r0);
-      const vec3 on = a + r0 * (b - a) + r1 * (c - a);
-      std::vector<vec3> points;
-      for (const float offset : {0.0f, 1e-7f, -1e-7f, 1e-5f, -1e-5f, 1e-3f, -1e-3f, 1e-2f})
-        points.push_back(on + offset * diagonal * n);
-      check(points, random.index(3), random.index(2) ? 1.0f : -1.0f, "by a cone triangle");
-    }
-    // ∇w_C (the smooth roots' normals): within a relative 1e-2 of ∇w at the derivatives' beta,
+    // ∇w (the smooth roots' normals): within a relative 1e-2 of ∇w at the derivatives' beta,
     // as the one-by-one gradient at the same beta is.
     float worst_gradient[2] = {0.0f, 0.0f};
     for (int block = 0; block < 12; ++block) {
-      const size_t s = size_t(random.index(int(rim.segment_count())));
-      const float h = diagonal / 256.0f;
-      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
-      ConeWindingBatch<512, true> batch;
+      const vec3 origin = by_the_rim();
+      RibbonWindingBatch<512, true> batch;
       std::vector<vec3> points;
       for (int k = 0; k < 300; ++k) {
         points.push_back(origin + random.uniform(0.5f * h, 8.0f * h) * random.unit());
         batch.add(points.back());
       }
-      batch.evaluate(view.cone, kHermiteNormalBeta, -1);
+      batch.evaluate(view.ribbons, kHermiteNormalBeta, -1, 1.0f);
       for (int j = 0; j < int(points.size()); ++j) {
         const vec3 reference = winding_number_crossing<true, false>(view, points[j], kConeDerivativeBeta).gradient;
         const vec3 alone = smooth_root_gradient(view, WindingOptions{}, points[j]);
@@ -219,34 +200,38 @@ TEST(MeshingCorners, BatchedConeSumsAreWithinTheScreensError) {
     std::printf("%s: gradient's largest relative error %.2e batched, %.2e one by one\n", name, worst_gradient[0],
                 worst_gradient[1]);
     EXPECT_LT(worst_gradient[0], 1e-2f) << name;
-    // The eighths' centres (kEighthPointBeta, eight by the rims as a block's eighths are): the
-    // errors of ŵ and of ∇w times an eighth's half-diagonal at 256³, against beta 24, tenfold under
-    // the estimates' margin (kBoxWindingMargin).
-    float worst_eighth = 0.0f;
-    for (int block = 0; block < 40; ++block) {
-      const size_t s = size_t(random.index(int(rim.segment_count())));
-      const float h = diagonal / 256.0f;
-      const vec3 origin = glm::mix(rim.endpoints[2 * s], rim.endpoints[2 * s + 1], random.uniform(0, 1));
-      ConeWindingBatch<8, true> eighths, reference;
-      for (int k = 0; k < 8; ++k) {
-        const vec3 x = origin + h * (vec3(float(k & 1), float((k >> 1) & 1), float(k >> 2)) * 4.0f - vec3(2.0f)) +
-                       random.uniform(0.0f, h) * random.unit();
-        eighths.add(x);
-        reference.add(x);
+    // The centres, eight by the rims as a block's eighths are (kEighthPointBeta) and as a group's
+    // blocks are (kTaylorPointBeta, twice as far apart): the errors of ŵ and of ∇w times the
+    // reach of the estimate at 256³ against beta 24, tenfold under its margin (kBoxWindingMargin).
+    for (const int scale : {1, 2}) {
+      const float beta = scale == 1 ? kEighthPointBeta : kTaylorPointBeta;
+      float worst_centre = 0.0f;
+      for (int block = 0; block < 40; ++block) {
+        const vec3 origin = by_the_rim();
+        const int axis = random.index(3);
+        const float sign = random.index(2) ? 1.0f : -1.0f;
+        RibbonWindingBatch<8, true> centres, reference;
+        for (int k = 0; k < 8; ++k) {
+          const vec3 x =
+              origin + float(scale) * h * (vec3(float(k & 1), float((k >> 1) & 1), float(k >> 2)) * 4.0f - vec3(2.0f)) +
+              random.uniform(0.0f, h) * random.unit();
+          centres.add(x);
+          reference.add(x);
+        }
+        centres.evaluate(view.ribbons, beta, axis, sign);
+        reference.evaluate(view.ribbons, 24.0f, axis, sign);
+        const float reach = float(scale) * 2.0f * std::sqrt(3.0f) * h;
+        for (int j = 0; j < 8; ++j) {
+          const float e = glm::length(centres.winding_gradient(j) - reference.winding_gradient(j)) * reach +
+                          std::fabs(centres.winding(j) - reference.winding(j));
+          if (e == e) worst_centre = std::max(worst_centre, e);
+        }
       }
-      eighths.evaluate(view.cone, kEighthPointBeta, -1);
-      reference.evaluate(view.cone, 24.0f, -1);
-      const float reach = 2.0f * std::sqrt(3.0f) * h;
-      for (int j = 0; j < 8; ++j) {
-        const float e = glm::length(eighths.winding_gradient(j) - reference.winding_gradient(j)) * reach +
-                        std::fabs(eighths.winding(j) - reference.winding(j));
-        if (e == e) worst_eighth = std::max(worst_eighth, e);
-      }
+      std::printf("%s: centres %d blocks apart at beta %g: largest error times reach %.2e\n", name, scale, beta,
+                  worst_centre);
+      EXPECT_LT(worst_centre, 0.1f * kBoxWindingMargin) << name;
+      EXPECT_GT(worst_centre, 0.0f) << name;
     }
-    std::printf("%s: the eighths' centres at beta %g: largest error times reach %.2e\n", name, kEighthPointBeta,
-                worst_eighth);
-    EXPECT_LT(worst_eighth, 0.1f * kBoxWindingMargin) << name;
-    EXPECT_GT(worst_eighth, 0.0f) << name;
     EXPECT_GT(sure, 10 * unsure) << name;
     EXPECT_GT(worst[0], 0.0f) << name;
     std::printf(

@@ -64,6 +64,12 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
 // z → v at the loose ends), with no ray. Eight points at a time in float, a term where float is
 // ill-conditioned in double (kNearConditioning, as the near triangles); a point on a ribbon is
 // unsure.
+// A far fan is summed once for the whole batch, by the second-order Taylor expansion of its
+// multipole about the batch's box centre c, where it lies beyond beta times its radius plus this
+// many box half-diagonals from c: the expansion's remainder is then of the order of the
+// multipole's own truncation (both a cube of the distance ratio).
+inline constexpr float kLocalExpansionReach = 2.0f;
+
 template <int Capacity, bool WantGradient = false>
 struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
   using Points = WindingBatchPoints<Capacity, WantGradient>;
@@ -82,6 +88,11 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
     const BvhView& bvh = ribbons.fans.bvh;
     if (bvh.node_count == 0 || ribbons.segment_count == 0) return;
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    // Fans far from the whole box go into one local expansion about its centre (below).
+    const vec3 box_centre = 0.5f * (lo + hi);
+    const float box_reach = kLocalExpansionReach * 0.5f * glm::length(hi - lo);
+    FieldAccumulator<float> local;
+    bool any_local = false;
     const float inner_scale2 = beta * beta;
     const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
     uint32_t stack[kTraversalStackSize];
@@ -102,7 +113,14 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
                   node.hi[v][lane] >= lo[v]);
         }
         if (far) {
-          this->far(ribbons.fans, ni, lane, centre, chunks);
+          const vec3 d = centre - box_centre;
+          const float reach = ribbons.fans.expansion[ni].radius[lane] + box_reach;
+          if (chunks > 1 && glm::dot(d, d) > inner_scale2 * reach * reach) {
+            add_cluster_far_field<2, true, true>(ribbons.fans, ni, lane, d, local);
+            any_local = true;
+          } else {
+            this->far(ribbons.fans, ni, lane, centre, chunks);
+          }
           const vec3 apex(fan.apex[0][lane], fan.apex[1][lane], fan.apex[2][lane]);
           for (uint32_t e = fan.first_end[lane]; e < fan.first_end[lane] + fan.end_count[lane]; ++e)
             segment(apex, ribbons.loose_ends[e].position, ribbons.loose_ends[e].multiplicity, axis, sign, chunks);
@@ -112,6 +130,24 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
           for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s)
             segment(ribbons.endpoints[2 * s], ribbons.endpoints[2 * s + 1], 1.0f, axis, sign, chunks);
         }
+      }
+    }
+    if (any_local) add_local(local, box_centre, chunks);
+  }
+
+  // The local expansion (Ω, ∇Ω and H Ω at c) at every point: second order in x − c.
+  GWNRT_FORCEINLINE void add_local(const FieldAccumulator<float>& l, const vec3& c, int chunks) {
+    const Sym3<float>& h = l.hessian;
+    for (int k = 0; k < chunks; ++k) {
+      const f8 dx = x[k] - c.x, dy = y[k] - c.y, dz = z[k] - c.z;
+      const f8 hx = h.xx * dx + h.xy * dy + h.xz * dz, hy = h.xy * dx + h.yy * dy + h.yz * dz,
+               hz = h.xz * dx + h.yz * dy + h.zz * dz;
+      omega[k] +=
+          l.omega + (l.gradient.x + 0.5f * hx) * dx + (l.gradient.y + 0.5f * hy) * dy + (l.gradient.z + 0.5f * hz) * dz;
+      if constexpr (WantGradient) {
+        gradient[0][k] += l.gradient.x + hx;
+        gradient[1][k] += l.gradient.y + hy;
+        gradient[2][k] += l.gradient.z + hz;
       }
     }
   }

@@ -71,8 +71,9 @@ GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, int
 }
 
 // Below this many points a batch is not worth its traversal of the ribbon tree for the points'
-// box (about a few single sums): they are summed one by one.
-inline constexpr int kMinConeBatch = 4;
+// box, and they are summed one by one. One: the ribbon tree's traversal for a single point costs
+// less than the cone's crossing method (the scan's corners took a tenth less than at 4).
+inline constexpr int kMinBatch = 1;
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // taylor_point at n <= 8 points, each along its own ray (axis[k], sign[k]): those that share a
@@ -93,7 +94,7 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
       in_batch[batch.count] = k;
       batch.add(x[k]);
     }
-    const bool batched = batch.count >= kMinConeBatch;
+    const bool batched = batch.count >= kMinBatch;
     if (batched) batch.evaluate(model.ribbons, kTaylorPointBeta, axis[first], sign[first]);
     for (int j = 0; j < batch.count; ++j) {
       const int k = in_batch[j];
@@ -337,7 +338,7 @@ struct BlockWindingPass {
       if (w.bounds[1 + i].usable) wanted |= 1u << i;
     }
 #if GWNRT_HOST_LANES && defined(__AVX__)
-    if (__builtin_popcount(wanted) >= kMinConeBatch) {
+    if (__builtin_popcount(wanted) >= kMinBatch) {
       batch_centres(b, wanted, w);
       return;
     }
@@ -623,7 +624,7 @@ struct CornerBatchPass {
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
 #if GWNRT_HOST_LANES && defined(__AVX__)
-    if (count >= kMinConeBatch) {
+    if (count >= kMinBatch) {
       batch_sums(b, ray, deferred, count, out);
       return;
     }
@@ -663,7 +664,7 @@ struct CornerBatchPass {
         out[i] = screened - level;
       }
     }
-    const bool refine_in_batch = near_count >= kMinConeBatch;
+    const bool refine_in_batch = near_count >= kMinBatch;
     if (refine_in_batch) {
       batch.count = 0;
       for (int j = 0; j < near_count; ++j) batch.add(position(b, near_level[j]));
@@ -686,7 +687,7 @@ struct CornerBatchPass {
           level;
     }
     // As exact_corner_winding, the batch at kConeBeta where it is sure.
-    const bool exact_in_batch = nearer_count >= kMinConeBatch;
+    const bool exact_in_batch = nearer_count >= kMinBatch;
     if (exact_in_batch) {
       batch.count = 0;
       for (int j = 0; j < nearer_count; ++j) batch.add(position(b, nearer[j]));
@@ -849,7 +850,7 @@ struct WalkBatchPass {
             batch.add(hermite[index[j]].point);
           }
         if (batch.count == 0) break;
-        const bool batched = batch.count >= kMinConeBatch;
+        const bool batched = batch.count >= kMinBatch;
         if (batched) batch.evaluate(model.ribbons, kRootSearchConeBeta, ray.axis, ray.sign);
         for (int a = 0; a < batch.count; ++a) {
           const int j = active[a];
@@ -920,7 +921,7 @@ struct RootBatchPass {
             batch.add(point[batch.count]);
           }
         if (batch.count == 0) break;
-        const bool batched = batch.count >= kMinConeBatch;
+        const bool batched = batch.count >= kMinBatch;
         if (batched) batch.evaluate(model.ribbons, kRootSearchConeBeta, ray.axis, ray.sign);
         for (int a = 0; a < batch.count; ++a) {
           const vec3& x = point[a];
@@ -974,7 +975,7 @@ struct NormalBatchPass {
           index[batch.count] = i;
           batch.add(hermite[i].point);
         }
-      if (batch.count < kMinConeBatch) {
+      if (batch.count < kMinBatch) {
         for (int j = 0; j < batch.count; ++j) finish(hermite[index[j]], vec3(__builtin_nanf("")));
         continue;
       }
