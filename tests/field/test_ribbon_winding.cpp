@@ -68,6 +68,53 @@ TEST(RibbonWinding, MatchesBruteForceOnOpenAndClosedMeshes) {
   }
 }
 
+// A ribbon's ∇Ω and H Ω (its segment's edge term and its two sides' half-line limits) against
+// central differences of its Ω and of that ∇Ω, in double, at random points off the ribbon.
+TEST(RibbonWinding, DerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto random_point = [&] { return dvec3(u(rng), u(rng), u(rng)); };
+  int compared = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const dvec3 a = random_point(), b = random_point();
+    dvec3 c(0.0);
+    c[trial % 3] = trial % 2 ? 1.0 : -1.0;
+    const dvec3 x = 2.0 * random_point();
+    double omega;
+    dvec3 g;
+    Sym3<double> h;
+    ribbon_derivatives(a - x, b - x, c, omega, g, h);
+    const double step = 1e-5;
+    bool smooth = true;
+    dvec3 fd_g;
+    dvec3 fd_h[3];
+    for (int k = 0; k < 3; ++k) {
+      dvec3 e(0.0);
+      e[k] = step;
+      double plus, minus;
+      dvec3 g_plus, g_minus;
+      Sym3<double> unused;
+      ribbon_derivatives(a - x - e, b - x - e, c, plus, g_plus, unused);
+      ribbon_derivatives(a - x + e, b - x + e, c, minus, g_minus, unused);
+      smooth = smooth && std::fabs(plus - minus) < 1.0;  // not across the ribbon (a jump of 4π)
+      fd_g[k] = (plus - minus) / (2.0 * step);
+      fd_h[k] = (g_plus - g_minus) / (2.0 * step);
+    }
+    if (!smooth || glm::length(g) > 1e3) continue;
+    ++compared;
+    const double scale = 1.0 + glm::length(g);
+    EXPECT_LT(glm::length(g - fd_g), 1e-5 * scale) << "trial " << trial;
+    const double hessian[3][3] = {{h.xx, h.xy, h.xz}, {h.xy, h.yy, h.yz}, {h.xz, h.yz, h.zz}};
+    double h_scale = 1.0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) h_scale = std::max(h_scale, std::fabs(hessian[i][j]));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        EXPECT_NEAR(hessian[i][j], fd_h[j][i], 1e-4 * h_scale) << "trial " << trial << " entry " << i << j;
+  }
+  EXPECT_GT(compared, 150);
+}
+
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // The batched ribbons (RibbonWindingBatch, M's jumps from their own walk): w within each meshing
 // beta's allowance of the scalar form wherever the batch is sure, for blocks of 8³ corners by the

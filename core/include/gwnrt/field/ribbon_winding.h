@@ -21,6 +21,23 @@ GWNRT_HD inline SolidAngleTangent<double> ribbon_tangent(const dvec3& a, const d
   return solid_angle_tangent(a, b, c, glm::length(a), glm::length(b), 1.0, glm::cross(b, c), glm::dot(b, c));
 }
 
+// The ribbon's Ω, ∇Ω and H Ω at x: its boundary a -> b, b -> ∞ and ∞ -> a (solid_angle.h's edge
+// terms and their half-line limits).
+GWNRT_HD inline void ribbon_derivatives(const dvec3& a, const dvec3& b, const dvec3& c, double& omega, dvec3& gradient,
+                                        Sym3<double>& hessian) {
+  const SolidAngleTangent<double> t = ribbon_tangent(a, b, c);
+  omega = 2.0 * atan2(t.numerator, t.denominator);
+  gradient = dvec3(0.0);
+  hessian = Sym3<double>{};
+  detail::add_edge_derivatives(detail::EdgeField<double>(a, b), gradient, hessian);
+  detail::add_half_line_derivatives(b, c, gradient, hessian);
+  dvec3 into_a(0.0);
+  Sym3<double> into_a_hessian;
+  detail::add_half_line_derivatives(a, c, into_a, into_a_hessian);
+  gradient -= into_a;
+  hessian += into_a_hessian * -1.0;
+}
+
 // w at x: the ribbons' solid angles over 4π (swept along −d) less M's jumps ahead of x along the
 // axis ray d that leaves M's box soonest. Exact up to round-off where x is off M. Where x lies on
 // a ribbon (the ray runs into ∂M: a query point in the plane of a planar hole, the ray in that
@@ -67,7 +84,8 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
 // A far fan is summed once for the whole batch, by the second-order Taylor expansion of its
 // multipole about the batch's box centre c, where it lies beyond beta times its radius plus this
 // many box half-diagonals from c: the expansion's remainder is then of the order of the
-// multipole's own truncation (both a cube of the distance ratio).
+// multipole's own truncation (both a cube of the distance ratio). So are the ribbons of its loose
+// ends that pass far enough from the box.
 inline constexpr float kLocalExpansionReach = 2.0f;
 
 template <int Capacity, bool WantGradient = false>
@@ -115,15 +133,26 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
         if (far) {
           const vec3 d = centre - box_centre;
           const float reach = ribbons.fans.expansion[ni].radius[lane] + box_reach;
-          if (chunks > 1 && glm::dot(d, d) > inner_scale2 * reach * reach) {
+          const bool to_local = chunks > 1 && glm::dot(d, d) > inner_scale2 * reach * reach;
+          if (to_local) {
             add_cluster_far_field<2, true, true>(ribbons.fans, ni, lane, d, local);
             any_local = true;
           } else {
             this->far(ribbons.fans, ni, lane, centre, chunks);
           }
           const vec3 apex(fan.apex[0][lane], fan.apex[1][lane], fan.apex[2][lane]);
-          for (uint32_t e = fan.first_end[lane]; e < fan.first_end[lane] + fan.end_count[lane]; ++e)
-            segment(apex, ribbons.loose_ends[e].position, ribbons.loose_ends[e].multiplicity, axis, sign, chunks);
+          for (uint32_t e = fan.first_end[lane]; e < fan.first_end[lane] + fan.end_count[lane]; ++e) {
+            const LooseEnd& end = ribbons.loose_ends[e];
+            // A loose end's ribbon too where it is twice as far from the box as a fan must be
+            // from c (at the same distance the exact corners' error doubled on the scan). With ∇w
+            // asked, the batch drops the ribbons' sides (they cancel over ∂M), which a ribbon's
+            // own expansion cannot.
+            if (!WantGradient && to_local &&
+                ribbon_gap2(apex, end.position, lo, hi, axis, sign) > 4.0f * inner_scale2 * box_reach * box_reach)
+              add_local_ribbon(apex, end.position, end.multiplicity, box_centre, axis, sign, local);
+            else
+              segment(apex, end.position, end.multiplicity, axis, sign, chunks);
+          }
         } else if (node.count[lane] == 0) {
           stack[sp++] = node.child[lane];
         } else {
@@ -133,6 +162,34 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
       }
     }
     if (any_local) add_local(local, box_centre, chunks);
+  }
+
+  // The squared gap between the points' box [lo, hi] and the box of segment p -> q swept
+  // opposite the ray (axis, sign) to infinity, which holds its ribbon.
+  static GWNRT_FORCEINLINE float ribbon_gap2(const vec3& p, const vec3& q, const vec3& lo, const vec3& hi, int axis,
+                                             float sign) {
+    vec3 ribbon_lo = glm::min(p, q), ribbon_hi = glm::max(p, q);
+    if (sign > 0.0f)
+      ribbon_lo[axis] = -kInfinity;
+    else
+      ribbon_hi[axis] = kInfinity;
+    const vec3 gap = glm::max(glm::max(ribbon_lo - hi, lo - ribbon_hi), vec3(0.0f));
+    return glm::dot(gap, gap);
+  }
+
+  // `multiplicity` times segment p -> q's ribbon, by its derivatives at c into the local expansion.
+  static void add_local_ribbon(const vec3& p, const vec3& q, float multiplicity, const vec3& c, int axis, float sign,
+                               FieldAccumulator<float>& local) {
+    dvec3 behind(0.0);
+    behind[axis] = -double(sign);
+    double omega;
+    dvec3 g;
+    Sym3<double> h;
+    ribbon_derivatives(dvec3(p) - dvec3(c), dvec3(q) - dvec3(c), behind, omega, g, h);
+    local.omega += float(omega * multiplicity);
+    local.gradient += vec3(g * double(multiplicity));
+    local.hessian += Sym3<float>{float(h.xx * multiplicity), float(h.xy * multiplicity), float(h.xz * multiplicity),
+                                 float(h.yy * multiplicity), float(h.yz * multiplicity), float(h.zz * multiplicity)};
   }
 
   // The local expansion (Ω, ∇Ω and H Ω at c) at every point: second order in x − c.

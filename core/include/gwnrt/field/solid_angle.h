@@ -289,6 +289,50 @@ struct FanGradientSum {
 // x ↦ e × x. Per edge that is not symmetric; the sum over the closed loop is. E is
 // antisymmetric, so it drops out of the symmetric part, and each edge adds only
 // ½(c vᵀ + v cᵀ): six entries instead of nine, and the round-off asymmetry is gone too.
+namespace detail {
+
+// The symmetric part of c ⊗ v, added to h.
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE void add_symmetric_product(const glm::vec<3, T>& c, const glm::vec<3, T>& v, Sym3<T>& h) {
+  h.xx += c.x * v.x;
+  h.yy += c.y * v.y;
+  h.zz += c.z * v.z;
+  h.xy += T(0.5) * (c.x * v.y + v.x * c.y);
+  h.xz += T(0.5) * (c.x * v.z + v.x * c.z);
+  h.yz += T(0.5) * (c.y * v.z + v.y * c.z);
+}
+
+// One edge's term of ∇Ω and its share of the Hessian, added.
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE void add_edge_derivatives(const EdgeField<T>& edge, glm::vec<3, T>& gradient,
+                                                     Sym3<T>& hessian) {
+  if (edge.degenerate) return;
+  const T inv_c2 = T(1) / edge.c2;
+  const T s = edge.f * inv_c2;
+  gradient += edge.c * s;
+  // ∂ĝ/∂x = -(I - ĝĝᵀ)/|g|, so ∇f = (I - ĝ_iĝ_iᵀ)e/|g_i| - (I - ĝ_jĝ_jᵀ)e/|g_j|;
+  // c(x) = const + e × x, so ∇(|c|²)/2 = c × e.
+  const glm::vec<3, T> grad_f = (edge.e - edge.gi_hat * glm::dot(edge.gi_hat, edge.e)) * edge.inv_li -
+                                (edge.e - edge.gj_hat * glm::dot(edge.gj_hat, edge.e)) * edge.inv_lj;
+  add_symmetric_product(edge.c, (grad_f - glm::cross(edge.c, edge.e) * (T(2) * s)) * inv_c2, hessian);
+}
+
+// The same for the half-line from g (relative to x) to infinity along the unit u: the edge term's
+// limit, (g × u) / (|g| (|g| + g·u)) (a ribbon's side, ribbon_winding.h). Its c = g × u moves
+// with x as u × x, antisymmetric, so again only c ⊗ ∇s counts.
+template <class T>
+GWNRT_HD GWNRT_FORCEINLINE void add_half_line_derivatives(const glm::vec<3, T>& g, const glm::vec<3, T>& u,
+                                                          glm::vec<3, T>& gradient, Sym3<T>& hessian) {
+  const T l = glm::length(g), along = glm::dot(g, u), d = l * (l + along);
+  if (!(d > T(0))) return;  // x on the half-line
+  const T s = T(1) / d;
+  const glm::vec<3, T> c = glm::cross(g, u);
+  gradient += c * s;
+  add_symmetric_product(c, (g * (T(2) + along / l) + u * l) * (s * s), hessian);
+}
+
+}  // namespace detail
+
 template <class T>
 GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
                                                       const glm::vec<3, T>& p2, const glm::vec<3, T>& x,
@@ -297,24 +341,7 @@ GWNRT_HD inline void triangle_solid_angle_derivatives(const glm::vec<3, T>& p0, 
   const detail::EdgeField<T> edges[3] = {{g[0], g[1]}, {g[1], g[2]}, {g[2], g[0]}};
   gradient = glm::vec<3, T>(0);
   hessian = Sym3<T>{};
-  for (const detail::EdgeField<T>& edge : edges) {
-    if (edge.degenerate) continue;
-    const T inv_c2 = T(1) / edge.c2;
-    const T s = edge.f * inv_c2;
-    gradient += edge.c * s;
-    // ∂ĝ/∂x = -(I - ĝĝᵀ)/|g|, so ∇f = (I - ĝ_iĝ_iᵀ)e/|g_i| - (I - ĝ_jĝ_jᵀ)e/|g_j|;
-    // c(x) = const + e × x, so ∇(|c|²)/2 = c × e.
-    const glm::vec<3, T> grad_f = (edge.e - edge.gi_hat * glm::dot(edge.gi_hat, edge.e)) * edge.inv_li -
-                                  (edge.e - edge.gj_hat * glm::dot(edge.gj_hat, edge.e)) * edge.inv_lj;
-    const glm::vec<3, T> v = (grad_f - glm::cross(edge.c, edge.e) * (T(2) * s)) * inv_c2;
-    const glm::vec<3, T>& c = edge.c;
-    hessian.xx += c.x * v.x;
-    hessian.yy += c.y * v.y;
-    hessian.zz += c.z * v.z;
-    hessian.xy += T(0.5) * (c.x * v.y + v.x * c.y);
-    hessian.xz += T(0.5) * (c.x * v.z + v.x * c.z);
-    hessian.yz += T(0.5) * (c.y * v.z + v.y * c.z);
-  }
+  for (const detail::EdgeField<T>& edge : edges) detail::add_edge_derivatives(edge, gradient, hessian);
   if constexpr (sizeof(T) == sizeof(float)) {
     if (edges[0].float_underflows() || edges[1].float_underflows() || edges[2].float_underflows() ||
         !detail::finite(gradient) || !detail::finite(hessian)) {
