@@ -3,7 +3,8 @@
 // from the level. Host-and-device.
 //
 // Along the axis ray from x (fixed axis and direction), w(x) = ŵ(x) − J(x), J(x) the sum of M's
-// jumps ahead of x and ŵ(x) = w_C(x) + the cone's jumps ahead (crossing_winding.h). ŵ jumps only
+// jumps ahead of x and ŵ(x) = w_C(x) + the cone's jumps ahead (crossing_winding.h), which is also
+// the sum of ∂M's ribbons swept opposite the ray (ribbon_winding.h, the batches). ŵ jumps only
 // where the ray sweeps across ∂M (a crossing of M that moves from one triangle to its neighbour
 // keeps its jump unless their edge is on ∂M); so where no segment of ∂M lies in the box swept
 // along the ray to M's box, ŵ is continuous on the box, harmonic, with ∇ŵ = ∇w the Biot–Savart

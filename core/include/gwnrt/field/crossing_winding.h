@@ -281,19 +281,18 @@ GWNRT_HD GWNRT_FORCEINLINE vec3 cone_gradient(const Cone& cone) {
 }  // namespace detail
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
-// w_C at many points at once (a block's corners in doubt, meshing/): one traversal of the cone's
-// tree for all of them, a cluster expanded where it is beyond beta radii of the points' whole box
-// (so of each point), each far cluster and near triangle evaluated at eight points at a time in
-// float. The cone's jumps are left to a walk of their own (jumps_along_axis_lattice), so a point
-// is unsure, and gets no value, wherever that walk and the solid angle might put it on different
-// sides of a near triangle or float is ill-conditioned: within kConeBatchPlaneTolerance of the
-// triangle's plane (relative to the distances involved, far above either's round-off), or near
-// the triangle itself (kNearConditioning, as the Taylor lanes). Elsewhere the float error is a
-// few ε / kNearConditioning a near triangle, far below the tree's own at the betas used.
+// w_C at many points at once (the sheets' side points, sdf/sheets.cpp, over their spanning
+// surfaces' tree): one traversal of the cone's tree for all of them, a cluster expanded where it is beyond beta radii
+// of the points' whole box (so of each point), each far cluster and near triangle evaluated at eight points at a time
+// in float. The cone's jumps are left to a walk of their own (jumps_along_axis_lattice), so a point is unsure, and gets
+// no value, wherever that walk and the solid angle might put it on different sides of a near triangle or float is
+// ill-conditioned: within kConeBatchPlaneTolerance of the triangle's plane (relative to the distances involved, far
+// above either's round-off), or near the triangle itself (kNearConditioning, as the Taylor lanes). Elsewhere the float
+// error is a few ε / kNearConditioning a near triangle, far below the tree's own at the betas used.
 inline constexpr float kConeBatchPlaneTolerance = 1e-4f;
-// With ∇w_C (the Biot–Savart field of the near triangles' edges, no jumps needed), an edge whose
-// |g_i × g_j| is below this share of |g_i||g_j| (x near its line, where float loses the terms that
-// cancel between the triangles sharing it) has its triangle taken in double.
+// With ∇w (the Biot–Savart field of edges, no jumps needed), an edge whose |g_i × g_j| is below
+// this share of |g_i||g_j| (x near its line, where float loses the terms that cancel between its
+// neighbours) is taken in double.
 inline constexpr float kBatchGradientConditioning = 1e-2f;
 
 // The points of a batch (ConeWindingBatch, RibbonWindingBatch), eight to a chunk, and what is
@@ -364,6 +363,29 @@ struct WindingBatchPoints {
     return glm::dot(gap, gap) > scale2 * ex.radius[lane] * ex.radius[lane];
   }
 
+  // Visits the lanes of a tree (its BVH and per-node expansions) depth first for the points' box
+  // [lo, hi]: on_lane(node index, node, lane, far, centre), far whether the lane is beyond beta
+  // radii of the box (lane_far, centre its expansion's), returns whether to open an inner lane.
+  template <class OnLane>
+  static GWNRT_FORCEINLINE void visit_lanes(const BvhView& bvh, const WideNodeExpansion* expansion, float beta,
+                                            const vec3& lo, const vec3& hi, OnLane&& on_lane) {
+    const float inner_scale2 = beta * beta;
+    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
+    uint32_t stack[kTraversalStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const WideNode& node = bvh.nodes[ni];
+      for (int lane = 0; lane < kBvhWidth; ++lane) {
+        if (node.child[lane] == kEmptyLane) continue;
+        vec3 centre;
+        const bool far = lane_far(node, expansion[ni], lane, lo, hi, inner_scale2, leaf_scale2, centre);
+        if (on_lane(ni, node, lane, far, centre) && node.count[lane] == 0) stack[sp++] = node.child[lane];
+      }
+    }
+  }
+
   // A far cluster of `tree`: its expansion (and ∇) at every point.
   GWNRT_FORCEINLINE void far(const TriangleTreeView& tree, uint32_t node, int lane, const vec3& centre, int chunks) {
     const auto lanes = [&](auto field) { return splat<f8>(field(node)[lane]); };
@@ -397,11 +419,10 @@ struct WindingBatchPoints {
   }
 };
 
-template <int Capacity, bool WantGradient = false>
-struct ConeWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
-  using Points = WindingBatchPoints<Capacity, WantGradient>;
-  using Points::count, Points::x, Points::y, Points::z, Points::omega, Points::unsure, Points::gradient,
-      Points::winding, Points::add_edge_field;
+template <int Capacity>
+struct ConeWindingBatch : WindingBatchPoints<Capacity, false> {
+  using Points = WindingBatchPoints<Capacity, false>;
+  using Points::count, Points::x, Points::y, Points::z, Points::omega, Points::unsure, Points::winding;
 
   // w at point i from the jumps of the cone and of M ahead of it along the caller's ray
   // (detail::crossing_winding's sum), or NaN where it is unsure.
@@ -409,36 +430,25 @@ struct ConeWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
     return float(cone_jumps - mesh_jumps) + winding(i);
   }
 
-  // axis: that of the rays along which the caller counts the cone's jumps, or -1 where it needs
-  // none (∇w alone: no point is then unsure for its side of a triangle).
+  // axis: that of the rays along which the caller counts the cone's jumps.
   void evaluate(const TriangleTreeView& cone, float beta, int axis) {
-    const int kx = axis < 0 ? -1 : (axis + 1) % 3, ky = (axis + 2) % 3;
+    const int kx = (axis + 1) % 3, ky = (axis + 2) % 3;
     if (count == 0) return;
     vec3 lo, hi;
     const int chunks = this->prepare(lo, hi);
     const float diagonal = glm::length(hi - lo);
     if (cone.bvh.node_count == 0) return;
-    const float inner_scale2 = beta * beta;
-    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
-    uint32_t stack[kTraversalStackSize];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-      const uint32_t ni = stack[--sp];
-      const WideNode& node = cone.bvh.nodes[ni];
-      for (int lane = 0; lane < kBvhWidth; ++lane) {
-        if (node.child[lane] == kEmptyLane) continue;
-        vec3 centre;
-        if (Points::lane_far(node, cone.expansion[ni], lane, lo, hi, inner_scale2, leaf_scale2, centre)) {
-          this->far(cone, ni, lane, centre, chunks);
-        } else if (node.count[lane] == 0) {
-          stack[sp++] = node.child[lane];
-        } else {
-          for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)
+    Points::visit_lanes(
+        cone.bvh, cone.expansion, beta, lo, hi,
+        [&](uint32_t ni, const WideNode& node, int lane, bool far, const vec3& centre) {
+          if (far) {
+            this->far(cone, ni, lane, centre, chunks);
+            return false;
+          }
+          for (uint32_t t = node.child[lane]; node.count[lane] > 0 && t < node.child[lane] + node.count[lane]; ++t)
             near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], diagonal, kx, ky, chunks);
-        }
-      }
-    }
+          return true;
+        });
   }
 
   GWNRT_FORCEINLINE void near(const vec3& p0, const vec3& p1, const vec3& p2, float diagonal, int kx, int ky,
@@ -455,16 +465,8 @@ struct ConeWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
       const detail::LaneTangent<f8> t = detail::lane_solid_angle_tangent(g[0], g[1], g[2]);
       f8 angle = 2.0f * lane_atan2(t.numerator, t.denominator);
       // Where float is ill-conditioned, the triangle again in double (as the Taylor lanes do).
-      i8 ill_lanes = point_on_triangle(t.numerator, t.denominator, t.length_product, kNearConditioning);
-      f8 edge_sum[3] = {};
-      if constexpr (WantGradient) {
-        const f8 la = lane_sqrt(g[0][0] * g[0][0] + g[0][1] * g[0][1] + g[0][2] * g[0][2]);
-        ill_lanes |= add_edge_field(g[0], g[1], la, t.lb, edge_sum);
-        ill_lanes |= add_edge_field(g[1], g[2], t.lb, t.lc, edge_sum);
-        ill_lanes |= add_edge_field(g[2], g[0], t.lc, la, edge_sum);
-        for (int k = 0; k < 3; ++k) gradient[k][c] += lane_select(ill_lanes, f8{}, edge_sum[k]);
-      }
-      const uint32_t ill = lane_bits(ill_lanes);
+      const uint32_t ill =
+          lane_bits(point_on_triangle(t.numerator, t.denominator, t.length_product, kNearConditioning));
       for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
         const int l = lowest_set_bit(rest);
         double length_product;
@@ -473,14 +475,8 @@ struct ConeWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
         unsure[c][l] |=
             point_on_triangle(exact.numerator, exact.denominator, length_product, kOnTriangleRoundOff) ? -1 : 0;
         angle[l] = float(2.0 * atan2(exact.numerator, exact.denominator));
-        if constexpr (WantGradient) {
-          const vec3 exact_gradient = detail::saturated_float(
-              triangle_solid_angle_gradient(dvec3(p0), dvec3(p1), dvec3(p2), dvec3(x[c][l], y[c][l], z[c][l])));
-          for (int k = 0; k < 3; ++k) gradient[k][c][l] += exact_gradient[k];
-        }
       }
       omega[c] += angle;
-      if (kx < 0) continue;
       // Whether the line along the axis through x might cross the triangle near x: the corners'
       // distances from x are at most the longer of |b|, |c| plus the longest edge. (A sign of a
       // difference of floats is exact, so the test beside the line is.)

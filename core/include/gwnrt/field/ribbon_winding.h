@@ -111,29 +111,25 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
     const float box_reach = kLocalExpansionReach * 0.5f * glm::length(hi - lo);
     FieldAccumulator<float> local;
     bool any_local = false;
-    const float inner_scale2 = beta * beta;
-    const float leaf_scale2 = inner_scale2 * (kLeafExpansionScale * kLeafExpansionScale);
-    uint32_t stack[kTraversalStackSize];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-      const uint32_t ni = stack[--sp];
-      const WideNode& node = bvh.nodes[ni];
-      const WideNodeFan& fan = ribbons.fan_ends[ni];
-      for (int lane = 0; lane < kBvhWidth; ++lane) {
-        if (node.child[lane] == kEmptyLane) continue;
-        vec3 centre;
-        bool far = fan.end_count[lane] != kOpenFan &&
-                   Points::lane_far(node, ribbons.fans.expansion[ni], lane, lo, hi, inner_scale2, leaf_scale2, centre);
-        if (far && axis >= 0) {  // and the beam misses the lane's box
-          const bool ahead = sign > 0.0f ? node.hi[axis][lane] >= lo[axis] : node.lo[axis][lane] <= hi[axis];
-          far = !(ahead && node.lo[u][lane] <= hi[u] && node.hi[u][lane] >= lo[u] && node.lo[v][lane] <= hi[v] &&
-                  node.hi[v][lane] >= lo[v]);
-        }
-        if (far) {
+    const float beta2 = beta * beta;
+    Points::visit_lanes(
+        bvh, ribbons.fans.expansion, beta, lo, hi,
+        [&](uint32_t ni, const WideNode& node, int lane, bool far, const vec3& centre) {
+          const WideNodeFan& fan = ribbons.fan_ends[ni];
+          far = far && fan.end_count[lane] != kOpenFan;
+          if (far && axis >= 0) {  // and the beam misses the lane's box
+            const bool ahead = sign > 0.0f ? node.hi[axis][lane] >= lo[axis] : node.lo[axis][lane] <= hi[axis];
+            far = !(ahead && node.lo[u][lane] <= hi[u] && node.hi[u][lane] >= lo[u] && node.lo[v][lane] <= hi[v] &&
+                    node.hi[v][lane] >= lo[v]);
+          }
+          if (!far) {
+            for (uint32_t s = node.child[lane]; node.count[lane] > 0 && s < node.child[lane] + node.count[lane]; ++s)
+              segment(ribbons.endpoints[2 * s], ribbons.endpoints[2 * s + 1], 1.0f, axis, sign, chunks);
+            return true;
+          }
           const vec3 d = centre - box_centre;
           const float reach = ribbons.fans.expansion[ni].radius[lane] + box_reach;
-          const bool to_local = chunks > 1 && glm::dot(d, d) > inner_scale2 * reach * reach;
+          const bool to_local = chunks > 1 && glm::dot(d, d) > beta2 * reach * reach;
           if (to_local) {
             add_cluster_far_field<2, true, true>(ribbons.fans, ni, lane, d, local);
             any_local = true;
@@ -143,24 +139,18 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
           const vec3 apex(fan.apex[0][lane], fan.apex[1][lane], fan.apex[2][lane]);
           for (uint32_t e = fan.first_end[lane]; e < fan.first_end[lane] + fan.end_count[lane]; ++e) {
             const LooseEnd& end = ribbons.loose_ends[e];
-            // A loose end's ribbon too where it is twice as far from the box as a fan must be
-            // from c (at the same distance the exact corners' error doubled on the scan). With ∇w
-            // asked, the batch drops the ribbons' sides (they cancel over ∂M), which a ribbon's
-            // own expansion cannot.
+            // A loose end's ribbon too where it is twice as far from the box as a fan must be from
+            // c (at the same distance the exact corners' error doubled on the scan). With ∇w asked,
+            // the batch drops the ribbons' sides (they cancel over ∂M), which a ribbon's own
+            // expansion cannot.
             if (!WantGradient && to_local &&
-                ribbon_gap2(apex, end.position, lo, hi, axis, sign) > 4.0f * inner_scale2 * box_reach * box_reach)
+                ribbon_gap2(apex, end.position, lo, hi, axis, sign) > 4.0f * beta2 * box_reach * box_reach)
               add_local_ribbon(apex, end.position, end.multiplicity, box_centre, axis, sign, local);
             else
               segment(apex, end.position, end.multiplicity, axis, sign, chunks);
           }
-        } else if (node.count[lane] == 0) {
-          stack[sp++] = node.child[lane];
-        } else {
-          for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s)
-            segment(ribbons.endpoints[2 * s], ribbons.endpoints[2 * s + 1], 1.0f, axis, sign, chunks);
-        }
-      }
-    }
+          return false;
+        });
     if (any_local) add_local(local, box_centre, chunks);
   }
 
