@@ -17,14 +17,6 @@
 namespace gwnrt {
 namespace {
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) {
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-  }
-  return ext;
-}
-
 // MeshLoadOptions::recentre: the origin for `world` (the positions in double, one per vertex), or
 // zero when the mesh lies near enough the origin for its size.
 dvec3 recentred_origin(const std::vector<dvec3>& world, const std::vector<uvec3>& triangles) {
@@ -44,7 +36,7 @@ Status load_mesh_unguarded(const std::string& path, Mesh& mesh, MeshLoadReport* 
   if (options.recentre && !report)
     return {StatusCode::kInvalidArgument,
             cat(path, ": MeshLoadOptions::recentre needs a MeshLoadReport to return the origin in")};
-  const std::string ext = lower_extension(path);
+  const std::string ext = io::lower_extension(path);
   const bool is_obj = ext == ".obj", is_stl = ext == ".stl";
   if (!is_obj && !is_stl && ext != ".ply") {
     return {StatusCode::kInvalidArgument,

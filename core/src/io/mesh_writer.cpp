@@ -18,6 +18,7 @@
 
 #include "base/message.h"
 #include "gwnrt/io/mesh_writer.h"
+#include "io/text.h"
 
 namespace gwnrt {
 namespace {
@@ -110,14 +111,6 @@ class OutFile {
 };
 
 // Checks
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) {
-    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
-  }
-  return ext;
-}
 
 template <glm::length_t N>
 bool all_finite(const glm::vec<N, float>& v) {
@@ -387,7 +380,7 @@ void write_stl(OutFile& out, const SurfaceMesh& m) {
 Status write_unguarded(const std::string& path, const SurfaceMesh& mesh, const MeshWriteOptions& options) {
   MeshFileFormat format = options.format;
   if (format == MeshFileFormat::kAuto) {
-    const std::string ext = lower_extension(path);
+    const std::string ext = io::lower_extension(path);
     if (ext == ".ply") {
       format = MeshFileFormat::kPly;
     } else if (ext == ".obj") {

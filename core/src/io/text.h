@@ -1,8 +1,10 @@
 // What the mesh readers share: strict number parsing (a malformed number is an error, never a
-// 0), line tokens and polygon fanning (files are read by gwnrt/io/read_file.h).
+// 0), line tokens and polygon fanning (files are read by gwnrt/io/read_file.h); and with the
+// writers, the format a path names.
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -20,6 +22,15 @@ using std::int64_t;
 using std::string_view;
 using std::uint32_t;
 using std::uint64_t;
+
+// A path's extension in lower case ("" without one): the format it names.
+inline std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return ext;
+}
 
 // Numbers
 
