@@ -76,33 +76,35 @@ GWNRT_HD inline int jumps_ahead(const TriangleTreeView& tree, const vec3& x, int
 inline constexpr int kMinBatch = 1;
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
-// taylor_point at n <= 8 points, each along its own ray (axis[k], sign[k]): those that share a
-// ray from one batched traversal of the ribbon tree (ŵ: the ribbons swept opposite that ray,
-// which is w plus M's jumps ahead; ∇w), the others and those the batch is unsure of one by one.
-// ok[k]: taylor_point's result.
+// taylor_point (at `beta`) at n <= N <= 64 points, each along its own ray (axis[k], sign[k]):
+// those that share a ray from one batched traversal of the ribbon tree (ŵ: the ribbons swept
+// opposite that ray, which is w plus M's jumps ahead; ∇w), the others and those the batch is
+// unsure of one by one. ok[k]: taylor_point's result.
+template <int N>
 inline void taylor_points(const ModelView& model, const vec3* x, const int* axis, const float* sign, int n,
-                          TaylorPoint* out, bool* ok) {
-  uint32_t pending = (1u << n) - 1u;
+                          TaylorPoint* out, bool* ok, float beta = kTaylorPointBeta) {
+  static_assert(N <= 64);
+  uint64_t pending = n >= 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1u;
   while (pending != 0) {  // one batch for each ray among them
-    const int first = lowest_set_bit(pending);
-    RibbonWindingBatch<8, true> batch;
-    int in_batch[8];
-    for (uint32_t rest = pending; rest != 0; rest &= rest - 1) {
-      const int k = lowest_set_bit(rest);
+    const int first = __builtin_ctzll(pending);
+    RibbonWindingBatch<N, true> batch;
+    int in_batch[N];
+    for (uint64_t rest = pending; rest != 0; rest &= rest - 1) {
+      const int k = __builtin_ctzll(rest);
       if (axis[k] != axis[first] || sign[k] != sign[first]) continue;
-      pending &= ~(1u << k);
+      pending &= ~(uint64_t(1) << k);
       in_batch[batch.count] = k;
       batch.add(x[k]);
     }
     const bool batched = batch.count >= kMinBatch;
-    if (batched) batch.evaluate(model.ribbons, kTaylorPointBeta, axis[first], sign[first]);
+    if (batched) batch.evaluate(model.ribbons, beta, axis[first], sign[first]);
     for (int j = 0; j < batch.count; ++j) {
       const int k = in_batch[j];
       if (batched) {
         out[k].w_hat = batch.winding(j);
         out[k].gradient = batch.winding_gradient(j);
       }
-      ok[k] = (batched && out[k].finite()) || taylor_point(model, x[k], axis[k], sign[k], out[k]);
+      ok[k] = (batched && out[k].finite()) || taylor_point(model, x[k], axis[k], sign[k], out[k], beta);
     }
   }
 }
@@ -171,7 +173,7 @@ struct ScoutQuery {
     }
     TaylorPoint p[8];
     bool ok[8];
-    taylor_points(model, centre, axis, sign, count, p, ok);
+    taylor_points<8>(model, centre, axis, sign, count, p, ok);
     for (int j = 0; j < count; ++j)
       out[pending[j]] = !(ok[j] && !taylor_may_leave_unsettled(p[j], bounds[j], centre[j], blocks[pending[j]], level));
   }
@@ -323,27 +325,27 @@ struct BlockWindingPass {
     return b;
   }
 
-  // After the block's centre (w.block): its eighths' centres where the block's leaves corners
-  // unsettled.
-  GWNRT_HD void finish(uint64_t slot, const GridCoord& b) const {
+  // After the block's centre (w.block): the eighths whose centres are wanted, where the block's
+  // estimate leaves corners unsettled (their bounds set).
+  GWNRT_HD uint32_t wanted_eighths(uint64_t slot, const GridCoord& b) const {
     BlockWinding& w = out[slot];
     const Aabb block = block_box(b);
     const vec3 centre = block.centre();
-    if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return;
-    uint32_t wanted = 0;  // the eighths whose centres are to be computed
+    if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return 0;
+    uint32_t wanted = 0;
     for (int i = 0; i < 8; ++i) {
       const Aabb mid = eighth_box(b, i);
       if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level)) continue;
       w.bounds[1 + i] = box_field_bounds(model, mid, w.axis, w.sign);
       if (w.bounds[1 + i].usable) wanted |= 1u << i;
     }
-#if GWNRT_HOST_LANES && defined(__AVX__)
-    if (__builtin_popcount(wanted) >= kMinBatch) {
-      batch_centres(b, wanted, w);
-      return;
-    }
-#endif
-    for (; wanted != 0; wanted &= wanted - 1) {
+    return wanted;
+  }
+
+  // Then those centres, one by one.
+  GWNRT_HD void finish(uint64_t slot, const GridCoord& b) const {
+    BlockWinding& w = out[slot];
+    for (uint32_t wanted = wanted_eighths(slot, b); wanted != 0; wanted &= wanted - 1) {
       const int i = lowest_set_bit(wanted);
       if (taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, w.point[1 + i], kEighthPointBeta))
         w.mid |= 1u << i;
@@ -358,8 +360,9 @@ struct BlockWindingPass {
 #if GWNRT_HOST_LANES && defined(__AVX__)
   // The blocks of a 2 × 2 × 2 group at once, by the group's first slot (the others do nothing):
   // their centres from one batched traversal of the ribbon tree for each ray among them
-  // (taylor_points), as taylor_point gives them; a centre the batch is unsure of takes taylor_point. Slots are in
-  // block order, so the group's first slot is its first block's.
+  // (taylor_points), then all the eighths' centres they want likewise (as many as 64 points, so
+  // that the traversal and the local expansions serve many chunks), as taylor_point gives them.
+  // Slots are in block order, so the group's first slot is its first block's.
   void group(uint64_t slot) const {
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const GridCoord g{b.x & ~1, b.y & ~1, b.z & ~1};
@@ -389,33 +392,32 @@ struct BlockWindingPass {
     }
     TaylorPoint p[8];
     bool ok[8];
-    taylor_points(model, centre, axis, sign, count, p, ok);
+    taylor_points<8>(model, centre, axis, sign, count, p, ok);
     for (int j = 0; j < count; ++j) {
       BlockWinding& w = out[member[wanted[j]]];
       w.point[0] = p[j];
       w.block = ok[j];
     }
-    for (int i = 0; i < members; ++i) finish(member[i], member_block[i]);
-  }
-
-  // The centres of the eighths in `wanted` from one batched traversal of the ribbon tree (ŵ: the
-  // ribbons swept opposite the block's ray, which is w plus M's jumps ahead; ∇w), as taylor_point
-  // gives them; one the batch is unsure of takes taylor_point.
-  void batch_centres(const GridCoord& b, uint32_t wanted, BlockWinding& w) const {
-    RibbonWindingBatch<8, true> batch;
-    int eighth[8];
-    for (uint32_t rest = wanted; rest != 0; rest &= rest - 1) {
-      eighth[batch.count] = lowest_set_bit(rest);
-      batch.add(eighth_box(b, eighth[batch.count]).centre());
+    vec3 mid_centre[64];
+    int mid_axis[64], mid_of[64], mid_count = 0;
+    float mid_sign[64];
+    for (int i = 0; i < members; ++i) {
+      const BlockWinding& w = out[member[i]];
+      for (uint32_t rest = wanted_eighths(member[i], member_block[i]); rest != 0; rest &= rest - 1) {
+        const int e = lowest_set_bit(rest);
+        mid_centre[mid_count] = eighth_box(member_block[i], e).centre();
+        mid_axis[mid_count] = w.axis;
+        mid_sign[mid_count] = w.sign;
+        mid_of[mid_count++] = 8 * i + e;
+      }
     }
-    batch.evaluate(model.ribbons, kEighthPointBeta, w.axis, w.sign);
-    for (int j = 0; j < batch.count; ++j) {
-      const int i = eighth[j];
-      TaylorPoint& p = w.point[1 + i];
-      p.w_hat = batch.winding(j);
-      p.gradient = batch.winding_gradient(j);
-      if (p.finite() || taylor_point(model, eighth_box(b, i).centre(), w.axis, w.sign, p, kEighthPointBeta))
-        w.mid |= 1u << i;
+    TaylorPoint mid[64];
+    bool mid_ok[64];
+    taylor_points<64>(model, mid_centre, mid_axis, mid_sign, mid_count, mid, mid_ok, kEighthPointBeta);
+    for (int j = 0; j < mid_count; ++j) {
+      BlockWinding& w = out[member[mid_of[j] / 8]];
+      w.point[1 + mid_of[j] % 8] = mid[j];
+      if (mid_ok[j]) w.mid |= 1u << (mid_of[j] % 8);
     }
   }
 #endif
