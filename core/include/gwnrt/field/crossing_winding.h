@@ -282,13 +282,15 @@ GWNRT_HD GWNRT_FORCEINLINE vec3 cone_gradient(const Cone& cone) {
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
 // w_C at many points at once (the sheets' side points, sdf/sheets.cpp, over their spanning
-// surfaces' tree): one traversal of the cone's tree for all of them, a cluster expanded where it is beyond beta radii
-// of the points' whole box (so of each point), each far cluster and near triangle evaluated at eight points at a time
-// in float. The cone's jumps are left to a walk of their own (jumps_along_axis_lattice), so a point is unsure, and gets
-// no value, wherever that walk and the solid angle might put it on different sides of a near triangle or float is
-// ill-conditioned: within kConeBatchPlaneTolerance of the triangle's plane (relative to the distances involved, far
-// above either's round-off), or near the triangle itself (kNearConditioning, as the Taylor lanes). Elsewhere the float
-// error is a few ε / kNearConditioning a near triangle, far below the tree's own at the betas used.
+// surfaces' tree): one traversal of the cone's tree for all of them, a cluster expanded where it
+// is beyond beta radii of the points' whole box (so of each point), each far cluster and near
+// triangle evaluated at eight points at a time in float. The cone's jumps are left to a walk of
+// their own (jumps_along_axis_lattice), so a point is unsure, and gets no value, wherever that
+// walk and the solid angle might put it on different sides of a near triangle or float is
+// ill-conditioned: within kConeBatchPlaneTolerance of the triangle's plane (relative to the
+// distances involved, far above either's round-off), or near the triangle itself
+// (kNearConditioning, as the Taylor lanes). Elsewhere the float error is a few ε /
+// kNearConditioning a near triangle, far below the tree's own at the betas used.
 inline constexpr float kConeBatchPlaneTolerance = 1e-4f;
 // With ∇w (the Biot–Savart field of edges, no jumps needed), an edge whose |g_i × g_j| is below
 // this share of |g_i||g_j| (x near its line, where float loses the terms that cancel between its
@@ -445,7 +447,7 @@ struct ConeWindingBatch : WindingBatchPoints<Capacity, false> {
             this->far(cone, ni, lane, centre, chunks);
             return false;
           }
-          for (uint32_t t = node.child[lane]; node.count[lane] > 0 && t < node.child[lane] + node.count[lane]; ++t)
+          for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)  // none when inner
             near(cone.vertices[3 * t], cone.vertices[3 * t + 1], cone.vertices[3 * t + 2], diagonal, kx, ky, chunks);
           return true;
         });

@@ -21,6 +21,14 @@ GWNRT_HD inline SolidAngleTangent<double> ribbon_tangent(const dvec3& a, const d
   return solid_angle_tangent(a, b, c, glm::length(a), glm::length(b), 1.0, glm::cross(b, c), glm::dot(b, c));
 }
 
+// The direction ribbons are swept in for rays along `axis` with `sign`: opposite the ray, so that
+// it crosses none.
+GWNRT_HD inline dvec3 ribbon_direction(int axis, float sign) {
+  dvec3 c(0.0);
+  c[axis] = -double(sign);
+  return c;
+}
+
 // The ribbon's Ω, ∇Ω and H Ω at x: its boundary a -> b, b -> ∞ and ∞ -> a (solid_angle.h's edge
 // terms and their half-line limits).
 GWNRT_HD inline void ribbon_derivatives(const dvec3& a, const dvec3& b, const dvec3& c, double& omega, dvec3& gradient,
@@ -48,8 +56,7 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
   ConeNudge nudge(m.bounds, x_in);
   for (;;) {
     const RayFrame frame = shortest_exit_axis_ray(m.bounds, x);
-    dvec3 behind(0.0);
-    behind[frame.kz] = -double(frame.sz);  // sz = 1 / d[kz] = ±1
+    const dvec3 behind = ribbon_direction(frame.kz, frame.sz);  // sz = 1 / d[kz] = ±1
     const dvec3 xd(x);
     double omega = 0;
     bool on_ribbon = false;
@@ -71,6 +78,13 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
 }
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
+// A far fan is summed once for the whole batch, by the second-order Taylor expansion of its
+// multipole about the batch's box centre c, where it lies beyond beta times its radius plus this
+// many box half-diagonals from c: the expansion's remainder is then of the order of the
+// multipole's own truncation (both a cube of the distance ratio). So are the ribbons of its loose
+// ends that pass far enough from the box.
+inline constexpr float kLocalExpansionReach = 2.0f;
+
 // w at many points at once from the ribbons (the meshing passes' points): one traversal of the
 // ribbon tree for all of them, M's jumps left to the caller. A lane is expanded only where it is
 // beyond beta radii of the points' box and the beam of the points' rays (their box swept along
@@ -81,13 +95,6 @@ GWNRT_HD inline double winding_number_by_ribbons(const ModelView& m, const vec3&
 // z → v at the loose ends), with no ray. Eight points at a time in float, a term where float is
 // ill-conditioned in double (kNearConditioning, as the near triangles); a point on a ribbon is
 // unsure.
-// A far fan is summed once for the whole batch, by the second-order Taylor expansion of its
-// multipole about the batch's box centre c, where it lies beyond beta times its radius plus this
-// many box half-diagonals from c: the expansion's remainder is then of the order of the
-// multipole's own truncation (both a cube of the distance ratio). So are the ribbons of its loose
-// ends that pass far enough from the box.
-inline constexpr float kLocalExpansionReach = 2.0f;
-
 template <int Capacity, bool WantGradient = false>
 struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
   using Points = WindingBatchPoints<Capacity, WantGradient>;
@@ -123,7 +130,7 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
                     node.hi[v][lane] >= lo[v]);
           }
           if (!far) {
-            for (uint32_t s = node.child[lane]; node.count[lane] > 0 && s < node.child[lane] + node.count[lane]; ++s)
+            for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s)  // none when inner
               segment(ribbons.endpoints[2 * s], ribbons.endpoints[2 * s + 1], 1.0f, axis, sign, chunks);
             return true;
           }
@@ -170,16 +177,13 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
   // `multiplicity` times segment p -> q's ribbon, by its derivatives at c into the local expansion.
   static void add_local_ribbon(const vec3& p, const vec3& q, float multiplicity, const vec3& c, int axis, float sign,
                                FieldAccumulator<float>& local) {
-    dvec3 behind(0.0);
-    behind[axis] = -double(sign);
     double omega;
     dvec3 g;
     Sym3<double> h;
-    ribbon_derivatives(dvec3(p) - dvec3(c), dvec3(q) - dvec3(c), behind, omega, g, h);
+    ribbon_derivatives(dvec3(p) - dvec3(c), dvec3(q) - dvec3(c), ribbon_direction(axis, sign), omega, g, h);
     local.omega += float(omega * multiplicity);
-    local.gradient += vec3(g * double(multiplicity));
-    local.hessian += Sym3<float>{float(h.xx * multiplicity), float(h.xy * multiplicity), float(h.xz * multiplicity),
-                                 float(h.yy * multiplicity), float(h.yz * multiplicity), float(h.zz * multiplicity)};
+    local.gradient += detail::saturated_float(g * double(multiplicity));
+    local.hessian += detail::saturated_float(h * double(multiplicity));
   }
 
   // The local expansion (Ω, ∇Ω and H Ω at c) at every point: second order in x − c.
@@ -219,9 +223,7 @@ struct RibbonWindingBatch : WindingBatchPoints<Capacity, WantGradient> {
         for (uint32_t rest = ill; rest != 0; rest &= rest - 1) {
           const int l = lowest_set_bit(rest);
           const dvec3 xd(x[c][l], y[c][l], z[c][l]), pd = dvec3(p) - xd, qd = dvec3(q) - xd;
-          dvec3 behind(0.0);
-          behind[axis] = c_axis;
-          const SolidAngleTangent<double> exact = ribbon_tangent(pd, qd, behind);
+          const SolidAngleTangent<double> exact = ribbon_tangent(pd, qd, ribbon_direction(axis, sign));
           unsure[c][l] |= point_on_triangle(exact.numerator, exact.denominator, glm::length(pd) * glm::length(qd),
                                             kOnTriangleRoundOff)
                               ? -1

@@ -100,7 +100,7 @@ struct SegmentTreeView {
   const WideNodeLength* lengths = nullptr;  // per node, parallel to bvh.nodes
 };
 
-// Per lane of ∂M's segment tree, for the ribbons (field/ribbon_winding.h): the apex z of the fan
+// Per lane of the ribbon tree (geometry/ribbon_tree.h, field/ribbon_winding.h): the apex z of the fan
 // over the segments below (a loose end of them, or any endpoint when they close), and their other
 // loose ends, RibbonTreeView::loose_ends[first_end, first_end + end_count), or end_count
 // kOpenFan where they have more than kMaxLooseEnds (the lane is then never expanded).
@@ -117,13 +117,14 @@ struct LooseEnd {
   float multiplicity;
 };
 
-// ∂M's segments clustered for the ribbons: the segment tree's BVH with, per lane, the fan's moments
-// (a triangle cluster's: `fans`, whose vertices are unused) and its loose ends.
+// ∂M's segments clustered for the ribbons: the ribbon tree's BVH (closed trails kept whole) with,
+// per lane, the fan's moments (a triangle cluster's: `fans`, whose vertices are unused) and its
+// loose ends.
 struct RibbonTreeView {
-  TriangleTreeView fans;                  // bvh: the segment tree's; expansion, order1, order2: the fans'
+  TriangleTreeView fans;                  // bvh: the ribbon tree's; expansion, order1, order2: the fans'
   const WideNodeFan* fan_ends = nullptr;  // per node, parallel to fans.bvh.nodes
   const LooseEnd* loose_ends = nullptr;
-  const vec3* endpoints = nullptr;  // 2 per segment, in the segment tree's leaf order
+  const vec3* endpoints = nullptr;  // 2 per segment, in the ribbon tree's leaf order
   uint32_t segment_count = 0;
 };
 

@@ -476,13 +476,6 @@ GWNRT_HD inline GridCoord column_corner(uint32_t column, int k, int axis, float 
   return axis == 0 ? GridCoord{ck, cu, cv} : (axis == 1 ? GridCoord{cv, ck, cu} : GridCoord{cu, cv, ck});
 }
 
-// The column of corner `local` along the slot's ray and its place k in it (column_corner's
-// inverse).
-GWNRT_HD inline uint32_t corner_column(const GridCoord& local, int axis, float sign, int& k) {
-  k = sign > 0.0f ? local[axis] : kBlockCells - 1 - local[axis];
-  return uint32_t(local[(axis + 1) % 3] + kBlockCells * local[(axis + 2) % 3]);
-}
-
 // The jumps of `tree`'s triangles ahead of each corner of block b along (axis, sign), for all its
 // columns in one walk: jumps[column][k] for the corner column_corner(column, k, axis, sign).
 GWNRT_HD inline void block_jumps(const TriangleTreeView& tree, const MeshGrid& grid, const GridCoord& b, int axis,
@@ -857,9 +850,9 @@ struct WalkBatchPass {
         for (int a = 0; a < batch.count; ++a) {
           const int j = active[a];
           const vec3 x = hermite[index[j]].point;
-          const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
+          const float w_hat = batched ? batch.winding(a) : __builtin_nanf("");
           values[j].value[values[j].count++] =
-              w_cone == w_cone
+              w_hat == w_hat
                   ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - walks.level
                   : root_search_value(model, x, walks.level);
           hermite[index[j]] = walks.walk(index[j], &values[j]);
@@ -928,10 +921,10 @@ struct RootBatchPass {
         for (int a = 0; a < batch.count; ++a) {
           const vec3& x = point[a];
           // The jumps' walks only where the batch has a value.
-          const float w_cone = batched ? batch.winding(a) : __builtin_nanf("");
+          const float w_hat = batched ? batch.winding(a) : __builtin_nanf("");
           bracket[active[a]].take(
-              w_cone == w_cone ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - level
-                               : root_search_value(model, x, level));
+              w_hat == w_hat ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - level
+                             : root_search_value(model, x, level));
         }
       }
       for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);
