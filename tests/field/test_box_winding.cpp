@@ -94,6 +94,68 @@ TEST(BoxWinding, EstimatesStayWithinTheirBoundsNearOpenMeshes) {
   }
 }
 
+// The bounds of a box's eighths from the box's own traversal (the batch of boxes a block's
+// centres take): usable where the box's are, no looser than each eighth's own traversal gives,
+// and holding on the eighth: |∇w| below K and Taylor's remainder from its centre below ½·H·r²,
+// by the double brute force.
+TEST(BoxWinding, EighthsBoundsFromTheBoxsTraversalHoldOnEachEighth) {
+  for (const char* name : {"bunny_holes.obj", "teapot.obj"}) {
+    SCOPED_TRACE(name);
+    const GwnModel model = test::build_model(test::load_test_mesh(name));
+    const ModelView m = model.view();
+    const ReferenceMesh ref = reference_mesh(model.mesh());
+    const Aabb bounds = model.bounds();
+    const float diagonal = glm::length(bounds.hi - bounds.lo);
+    test::Random rng(17);
+    int usable = 0;
+    for (int i = 0; i < 40; ++i) {
+      const uvec3 t = model.mesh().triangles[rng.index(int(model.mesh().triangles.size()))];
+      const vec3 on = (model.mesh().positions[t.x] + model.mesh().positions[t.y] + model.mesh().positions[t.z]) / 3.0f;
+      const float half = diagonal * std::exp2(-float(3 + rng.index(3))) * 0.5f;
+      Aabb boxes[9];
+      boxes[0].lo = on + vec3(rng.uniform(-half, 0), rng.uniform(-half, 0), rng.uniform(-half, 0)) * 2.0f;
+      boxes[0].hi = boxes[0].lo + vec3(2.0f * half);
+      const vec3 mid = boxes[0].centre();
+      for (int k = 0; k < 8; ++k)
+        for (int a = 0; a < 3; ++a) {
+          const bool upper = (k >> a) & 1;
+          boxes[1 + k].lo[a] = upper ? mid[a] : boxes[0].lo[a];
+          boxes[1 + k].hi[a] = upper ? boxes[0].hi[a] : mid[a];
+        }
+      const int axis = rng.index(3);
+      const float sign = rng.index(2) ? 1.0f : -1.0f;
+      BoxFieldBounds b[9];
+      box_field_bounds(m, boxes, axis, sign, b);
+      const BoxFieldBounds whole = box_field_bounds(m, boxes[0], axis, sign);
+      EXPECT_EQ(b[0].usable, whole.usable) << "box " << i;
+      if (!b[0].usable) continue;
+      ++usable;
+      EXPECT_FLOAT_EQ(b[0].gradient, whole.gradient) << "box " << i;
+      EXPECT_FLOAT_EQ(b[0].hessian, whole.hessian) << "box " << i;
+      for (int k = 1; k < 9; ++k) {
+        SCOPED_TRACE("box " + std::to_string(i) + " eighth " + std::to_string(k - 1));
+        ASSERT_TRUE(b[k].usable);
+        const BoxFieldBounds own = box_field_bounds(m, boxes[k], axis, sign);
+        ASSERT_TRUE(own.usable);
+        EXPECT_LE(b[k].gradient, own.gradient * (1 + 1e-4f));
+        EXPECT_LE(b[k].hessian, own.hessian * (1 + 1e-4f));
+        EXPECT_LE(b[k].gradient, b[0].gradient * (1 + 1e-4f));
+        const dvec3 c(boxes[k].centre());
+        const double w_c = reference_w(ref, c) + jumps_at(m, vec3(c), axis, sign);
+        const dvec3 g_c = reference_gradient(ref, c);
+        for (int q = 0; q < 6; ++q) {
+          const dvec3 x(rng.in_box(boxes[k]));
+          EXPECT_LE(glm::length(reference_gradient(ref, x)), b[k].gradient * (1 + 1e-4));
+          const double w_x = reference_w(ref, x) + jumps_at(m, vec3(x), axis, sign);
+          const double r = glm::length(x - c);
+          EXPECT_LE(std::abs(w_x - w_c - glm::dot(g_c, x - c)), 0.5 * b[k].hessian * r * r + 1e-6);
+        }
+      }
+    }
+    EXPECT_GE(usable, 10);  // not vacuous
+  }
+}
+
 // A box about a vertex of ∂M holds ∂M: no bounds, whichever way it is swept.
 TEST(BoxWinding, NoBoundsWhereTheSweptBoxHoldsTheBoundary) {
   const GwnModel model = test::build_model(test::load_test_mesh("bunny_holes.obj"));

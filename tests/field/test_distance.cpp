@@ -300,6 +300,34 @@ TEST(UnsignedDistance, VerticesEdgesSliversTiesAndFarPoints) {
   }
 }
 
+// Whether a triangle lies within a radius (the scout's test) against the brute-force distance:
+// radii just below and above each point's distance, and random ones, at points near and on M.
+TEST(AnyWithin, MatchesTheBruteForceDistance) {
+  const Mesh mesh = load_test_mesh("bunny_holes.obj");
+  const GwnModel model = build_model(Mesh(mesh));
+  const TriangleTreeView view = model.triangle_view();
+  const Aabb box = mesh_bounds(mesh);
+  const float diag = glm::length(box.hi - box.lo);
+  test::Random rng(37);
+  int within = 0, beyond = 0;
+  for (int k = 0; k < 400; ++k) {
+    const vec3 x = k % 4 == 0 ? mesh.positions[size_t(rng.index(int(mesh.positions.size())))]
+                              : box.lo - 0.1f * diag + rng.uniform(0, 1.2f) * (box.hi - box.lo);
+    const double d = mesh_distance(mesh, dvec3(x));
+    // A few ulps of the box either side of the distance are the float test's to call.
+    const double slack = 1e-6 * diag;
+    for (const double radius : {d * 0.9 - slack, d * 1.1 + slack, double(rng.uniform(0, 0.3f * diag))}) {
+      if (radius < 0 || std::abs(radius - d) <= slack) continue;
+      const bool expected = d < radius;
+      EXPECT_EQ(any_within(view, x, float(radius)), expected)
+          << "point " << k << " distance " << d << " radius " << radius;
+      ++(expected ? within : beyond);
+    }
+  }
+  EXPECT_GT(within, 100);
+  EXPECT_GT(beyond, 100);
+}
+
 // The boundary's segments by both paths, against the brute force.
 TEST(BoundaryDistance, FourWideMatchesScalarPath) {
   const GwnModel model = build_model(load_test_mesh("bunny_holes.obj"));

@@ -2,6 +2,8 @@
 // of cell corners, from one shared ray, and their screened values.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "gwnrt/field/crossing_winding.h"
 #include "gwnrt/field/ribbon_winding.h"
 #include "gwnrt/meshing/dual_contouring.h"
@@ -348,6 +350,71 @@ TEST(MeshingEdges, SmoothRootsLieOnSWithinTheSearchsError) {
     }
     EXPECT_GE(smooth, 50) << name;
   }
+}
+
+// The first point of a whole edge's root search, from the corner values along its line: on a
+// cubic through four corners (a quadratic through three where the fourth is missing or a jump
+// away) the root itself and the slope there, against bisection in double; NaN where no three
+// values fit.
+TEST(MeshingEdges, InterpolatedGuessIsTheRootOfTheInterpolant) {
+  test::Random rng(41);
+  int cubics = 0;
+  for (int k = 0; k < 2000 && cubics < 300; ++k) {
+    // p(t) = a (t − r) + b (t − r)² + c (t − r)³, monotone on [−1, 2] when its slope keeps a sign.
+    const double r = rng.uniform(0.02f, 0.98f), a = rng.uniform(0.05f, 0.2f) * (rng.index(2) ? 1 : -1);
+    const double b = rng.uniform(-0.1f, 0.1f) * a, c = rng.uniform(-0.05f, 0.05f) * a;
+    const auto p = [&](double t) { return a * (t - r) + b * (t - r) * (t - r) + c * (t - r) * (t - r) * (t - r); };
+    const auto dp = [&](double t) { return a + 2 * b * (t - r) + 3 * c * (t - r) * (t - r); };
+    if (dp(-1) * a <= 0 || dp(2) * a <= 0 || std::abs(p(-1)) >= 0.5 || std::abs(p(2)) >= 0.5) continue;
+    ++cubics;
+    float slope = NAN;
+    const float t = interpolated_root_guess(float(p(-1)), float(p(0)), float(p(1)), float(p(2)), slope);
+    EXPECT_NEAR(t, r, 2e-5) << "cubic " << k;
+    EXPECT_NEAR(slope, dp(r), 1e-4 * std::abs(a)) << "cubic " << k;
+    // A missing fourth value, or one a jump away: the quadratic through the other three, exact
+    // when the data are quadratic.
+    const auto q = [&](double u) { return a * (u - r) + b * (u - r) * (u - r); };
+    if ((a + 2 * b * (-1 - r)) * a <= 0 || (a + 2 * b * (2 - r)) * a <= 0) continue;
+    EXPECT_NEAR(interpolated_root_guess(NAN, float(q(0)), float(q(1)), float(q(2)), slope), r, 2e-5);
+    EXPECT_NEAR(interpolated_root_guess(float(q(-1)), float(q(0)), float(q(1)), float(q(2)) + 1.0f, slope), r, 2e-5);
+  }
+  EXPECT_GE(cubics, 300);
+  float slope = 0;
+  EXPECT_TRUE(std::isnan(interpolated_root_guess(NAN, -0.2f, 0.3f, NAN, slope)));
+  EXPECT_TRUE(std::isnan(interpolated_root_guess(5.0f, -0.2f, 0.3f, -7.0f, slope)));
+}
+
+// The root search ends within its tolerance of the root of smooth functions, and in fewer
+// steps from an interpolated guess than from the secant of the edge's ends.
+TEST(MeshingEdges, BracketFindsTheRootFasterFromAGuess) {
+  test::Random rng(43);
+  int with_guess = 0, without = 0;
+  for (int k = 0; k < 300; ++k) {
+    const double r = rng.uniform(0.02f, 0.98f), a = rng.uniform(0.05f, 1.0f) * (rng.index(2) ? 1 : -1);
+    const double b = rng.uniform(-0.4f, 0.4f) * a, c = rng.uniform(-0.3f, 0.3f) * a;
+    const auto f = [&](double t) { return a * (t - r) + b * (t - r) * (t - r) + c * std::sin(3 * (t - r)) * (t - r); };
+    const float h = 1.0f;
+    for (const bool guess : {false, true}) {
+      IllinoisBracket bracket(0.0f, float(f(0)), h, float(f(1)), h);
+      if (guess) {
+        float slope = NAN;
+        bracket.first_guess = interpolated_root_guess(float(f(-1)), float(f(0)), float(f(1)), float(f(2)), slope);
+        bracket.slope = slope;
+      }
+      int values = 0;
+      while (bracket.active()) {
+        bracket.take(float(f(bracket.next())));
+        ++values;
+      }
+      ASSERT_FALSE(bracket.capped()) << "function " << k;
+      // Within the bracket's tolerance, or where |f| is within the value tolerance (and float's).
+      const double t = bracket.root();
+      EXPECT_TRUE(std::abs(t - r) <= kRootTolerance * h || std::abs(f(t)) <= kRootValueTolerance + 1e-6)
+          << "function " << k << (guess ? " with" : " without") << " a guess: " << t << " against " << r;
+      (guess ? with_guess : without) += values;
+    }
+  }
+  EXPECT_LT(with_guess, without);
 }
 
 // A walk that stops for each value before a crossing of M (value_deferred), given them one at a

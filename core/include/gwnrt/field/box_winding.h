@@ -85,37 +85,119 @@ GWNRT_HD inline float box_gap2(const vec3& lo, const vec3& hi, const Aabb& box) 
 
 }  // namespace detail
 
-// K = (1/4π) Σ length / gap² over ∂M's segments (gap: between the segment's box and `box`) and
+// K = (1/4π) Σ length / gap² over ∂M's segments (gap: between the segment's box and the box) and
 // the Hessian's (1/4π) Σ 2 length / gap³ (the kernel (y − l)/|y − l|³ of ∇w has a derivative of
-// norm 2/|y − l|³), clusters taken whole when their gap is at least their box's diagonal; 0 for
-// a closed mesh. False when a segment's box meets `swept` (which holds `box`) or the caps are
-// reached.
-GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, const Aabb& box, const Aabb& swept,
-                                           float& gradient_bound, float& hessian_bound) {
-  gradient_bound = hessian_bound = 0.0f;
+// norm 2/|y − l|³) for boxes[0] and the boxes inside it at once, from one traversal: clusters
+// taken whole when their gap from boxes[0] is at least their box's diagonal, each box's term
+// with its own gap (no smaller); 0 for a closed mesh. The sums are in float, rounded up past
+// their error (terms·2⁻²⁴ relative). False when a segment's box meets `swept` (which holds
+// boxes[0]) or the caps are reached.
+namespace detail {
+
+// The sums of boundary_field_bounds for N boxes: Σ length / gap² and Σ length / gap³, a term
+// (a box holding segments, and their length) added to each box's sums with its gap from that
+// box (positive). Eight boxes to a vector where the host has them.
+template <int N>
+struct BoundSums {
+#if GWNRT_HOST_LANES && defined(__AVX__)
+  static constexpr int kChunks = (N + 7) / 8;
+  f8 lo[3][kChunks], hi[3][kChunks], sum[kChunks], sum3[kChunks];
+  explicit BoundSums(const Aabb (&boxes)[N]) {
+    for (int c = 0; c < kChunks; ++c) {
+      sum[c] = sum3[c] = f8{};
+      for (int l = 0; l < 8; ++l) {
+        const Aabb& box = boxes[8 * c + l < N ? 8 * c + l : N - 1];  // lanes past N repeat the last box
+        for (int a = 0; a < 3; ++a) {
+          lo[a][c][l] = box.lo[a];
+          hi[a][c][l] = box.hi[a];
+        }
+      }
+    }
+  }
+  GWNRT_FORCEINLINE void add(const vec3& term_lo, const vec3& term_hi, float length) {
+    for (int c = 0; c < kChunks; ++c) {
+      f8 gap2{};
+      for (int a = 0; a < 3; ++a) {
+        const f8 below = splat<f8>(term_lo[a]) - hi[a][c], above = lo[a][c] - term_hi[a];
+        const f8 larger = lane_select(below > above, below, above);
+        const f8 gap = lane_select(larger > 0.0f, larger, f8{});
+        gap2 += gap * gap;
+      }
+      const f8 term = length / gap2;
+      sum[c] += term;
+      sum3[c] += term / lane_sqrt(gap2);
+    }
+  }
+  float gradient_sum(int k) const { return sum[k / 8][k % 8]; }
+  float hessian_sum(int k) const { return sum3[k / 8][k % 8]; }
+#else
+  float lo[3][N], hi[3][N], sum[N], sum3[N];
+  GWNRT_HD explicit BoundSums(const Aabb (&boxes)[N]) {
+    for (int k = 0; k < N; ++k) {
+      sum[k] = sum3[k] = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        lo[a][k] = boxes[k].lo[a];
+        hi[a][k] = boxes[k].hi[a];
+      }
+    }
+  }
+  GWNRT_HD void add(const vec3& term_lo, const vec3& term_hi, float length) {
+    for (int k = 0; k < N; ++k) {
+      float gap2 = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        const float gap = max_of(max_of(term_lo[a] - hi[a][k], lo[a][k] - term_hi[a]), 0.0f);
+        gap2 += gap * gap;
+      }
+      const float term = length / gap2;
+      sum[k] += term;
+      sum3[k] += term / sqrtf(gap2);
+    }
+  }
+  GWNRT_HD float gradient_sum(int k) const { return sum[k]; }
+  GWNRT_HD float hessian_sum(int k) const { return sum3[k]; }
+#endif
+};
+
+}  // namespace detail
+
+// K = (1/4π) Σ length / gap² over ∂M's segments (gap: between the segment's box and the box) and
+// the Hessian's (1/4π) Σ 2 length / gap³ (the kernel (y − l)/|y − l|³ of ∇w has a derivative of
+// norm 2/|y − l|³) for boxes[0] and the boxes inside it at once, from one traversal: clusters
+// taken whole when their gap from boxes[0] is at least their box's diagonal, each box's term
+// with its own gap (no smaller); 0 for a closed mesh. The sums are in float, rounded up past
+// their error (terms·2⁻²⁴ relative). False when a segment's box meets `swept` (which holds
+// boxes[0]) or the caps are reached.
+template <int N>
+GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, const Aabb (&boxes)[N], const Aabb& swept,
+                                           float (&gradient_bound)[N], float (&hessian_bound)[N]) {
+  for (int k = 0; k < N; ++k) gradient_bound[k] = hessian_bound[k] = 0.0f;
   if (boundary.segment_count == 0 || boundary.bvh.node_count == 0) return true;
   if (!boundary.lengths) return false;
+  detail::BoundSums<N> sums(boxes);
+  uint32_t terms = 0;
+  const auto add = [&](const vec3& term_lo, const vec3& term_hi, float length) {
+    sums.add(term_lo, term_hi, length);
+    ++terms;
+  };
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = 0;
   int segments_tested = 0;
-  double sum = 0.0, sum3 = 0.0;
   while (sp > 0) {
     const uint32_t index = stack[--sp];
     const WideNode& node = boundary.bvh.nodes[index];
     for (int lane = 0; lane < kBvhWidth; ++lane) {
       if (node.child[lane] == kEmptyLane) continue;
-      const float gap2 = detail::lane_box_gap2(node, lane, box);
       if (!detail::lane_meets_box(node, lane, swept)) {
+        const float gap2 = detail::lane_box_gap2(node, lane, boxes[0]);
         float diagonal2 = 0.0f;
         for (int a = 0; a < 3; ++a) {
           const float e = node.hi[a][lane] - node.lo[a][lane];
           diagonal2 += e * e;
         }
         if (gap2 >= diagonal2 && gap2 > 0.0f) {
-          const double term = double(boundary.lengths[index].length[lane]) / double(gap2);
-          sum += term;
-          sum3 += term / sqrt(double(gap2));
+          add(vec3(node.lo[0][lane], node.lo[1][lane], node.lo[2][lane]),
+              vec3(node.hi[0][lane], node.hi[1][lane], node.hi[2][lane]), boundary.lengths[index].length[lane]);
           continue;
         }
       }
@@ -127,33 +209,46 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
       for (uint32_t s = node.child[lane]; s < node.child[lane] + node.count[lane]; ++s) {
         if (++segments_tested > kMaxBoxBoundSegments) return false;
         const vec3 a = boundary.endpoints[2 * s], b = boundary.endpoints[2 * s + 1];
-        const vec3 lo = glm::min(a, b), hi = glm::max(a, b);
-        if (detail::box_gap2(lo, hi, swept) == 0.0f) return false;  // ∂M in the swept box
-        const double gap2 = detail::box_gap2(lo, hi, box);
-        const double term = double(glm::length(b - a)) / gap2;
-        sum += term;
-        sum3 += term / sqrt(gap2);
+        const vec3 segment_lo = glm::min(a, b), segment_hi = glm::max(a, b);
+        if (detail::box_gap2(segment_lo, segment_hi, swept) == 0.0f) return false;  // ∂M in the swept box
+        add(segment_lo, segment_hi, glm::length(b - a));
       }
     }
   }
-  // Rounded up past the float sums' error.
-  gradient_bound = float(sum * (0.25 * kInvPi) * (1.0 + 1e-5));
-  hessian_bound = float(sum3 * (0.5 * kInvPi) * (1.0 + 1e-5));
+  // Each term is off by a few roundings and the sum by one per term, all relative.
+  const float round_up = 1.0f + float(terms + 8) * 0x1p-23f;
+  for (int k = 0; k < N; ++k) {
+    gradient_bound[k] = sums.gradient_sum(k) * float(0.25 * kInvPi) * round_up;
+    hessian_bound[k] = sums.hessian_sum(k) * float(0.5 * kInvPi) * round_up;
+  }
   return true;
 }
 
-// The bounds over `box` for rays along (axis, sign): the box swept along that direction to M's
-// box must hold no segment of ∂M.
-GWNRT_HD inline BoxFieldBounds box_field_bounds(const ModelView& m, const Aabb& box, int axis, float sign) {
-  BoxFieldBounds out;
-  Aabb swept = box;
+// The bounds over boxes[0] and the boxes inside it for rays along (axis, sign): the first box
+// swept along that direction to M's box must hold no segment of ∂M (the others' swept boxes lie
+// in its own).
+template <int N>
+GWNRT_HD inline void box_field_bounds(const ModelView& m, const Aabb (&boxes)[N], int axis, float sign,
+                                      BoxFieldBounds (&out)[N]) {
+  Aabb swept = boxes[0];
   if (sign > 0.0f)
     swept.hi[axis] = max_of(swept.hi[axis], m.bounds.hi[axis]);
   else
     swept.lo[axis] = min_of(swept.lo[axis], m.bounds.lo[axis]);
-  out.usable = boundary_field_bounds(m.boundary, box, swept, out.gradient, out.hessian) && is_finite(out.gradient) &&
-               is_finite(out.hessian);
-  return out;
+  float gradient[N], hessian[N];
+  const bool usable = boundary_field_bounds(m.boundary, boxes, swept, gradient, hessian);
+  for (int k = 0; k < N; ++k) {
+    out[k].gradient = gradient[k];
+    out[k].hessian = hessian[k];
+    out[k].usable = usable && is_finite(gradient[k]) && is_finite(hessian[k]);
+  }
+}
+
+GWNRT_HD inline BoxFieldBounds box_field_bounds(const ModelView& m, const Aabb& box, int axis, float sign) {
+  const Aabb boxes[1] = {box};
+  BoxFieldBounds out[1];
+  box_field_bounds(m, boxes, axis, sign, out);
+  return out[0];
 }
 
 // ŵ and ∇w at x along (axis, sign): one cone traversal at the derivatives' beta. False on the cone.

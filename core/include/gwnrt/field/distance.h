@@ -211,14 +211,12 @@ GWNRT_HD GWNRT_FORCEINLINE void nearest_in_leaf(const Leaf& leaf, uint32_t first
 
 // Near-first branch and bound over a wide BVH: a node's four boxes at once, a leaf's primitives
 // four at once (host), the nearest inner child popped next, and whatever is no nearer than the
-// best so far left unopened. The closest point of the nearest primitive (leaf order; ids maps to
-// the input index) is found last, once, by Leaf::closest.
-template <class Leaf, bool Lanes = kDistanceLanes>
-GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, const Leaf& leaf) {
-  NearestPrimitive out;
-  if (bvh.node_count == 0) return out;
-  float best2 = kInfinity;
-  uint32_t best = kEmptyLane;
+// best so far (best2 on entry: a bound) left unopened. `best`: the nearest primitive in leaf
+// order, or kEmptyLane; with StopAtFirst the first found within the bound instead.
+template <class Leaf, bool Lanes = kDistanceLanes, bool StopAtFirst = false>
+GWNRT_HD void nearest_in_tree(const BvhView& bvh, const vec3& x, const Leaf& leaf, float& best2, uint32_t& best) {
+  best = kEmptyLane;
+  if (bvh.node_count == 0) return;
   NearFirstEntry stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = {0, 0.0f};
@@ -232,13 +230,25 @@ GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* 
     int inner_count = 0;
     for (int l = 0; l < kBvhWidth; ++l) {
       if (!(d2[l] < best2)) continue;
-      if (node.count[l] == 0)
+      if (node.count[l] == 0) {
         inner[inner_count++] = {node.child[l], d2[l]};
-      else
+      } else {
         nearest_in_leaf<Lanes>(leaf, node.child[l], node.count[l], x, best2, best);
+        if (StopAtFirst && best != kEmptyLane) return;
+      }
     }
     push_near_first(stack, sp, inner, inner_count);
   }
+}
+
+// The nearest primitive (leaf order; ids maps to the input index), its closest point found last,
+// once, by Leaf::closest.
+template <class Leaf, bool Lanes = kDistanceLanes>
+GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, const Leaf& leaf) {
+  NearestPrimitive out;
+  float best2 = kInfinity;
+  uint32_t best;
+  nearest_in_tree<Leaf, Lanes>(bvh, x, leaf, best2, best);
   if (best == kEmptyLane) return out;
   const ClosestPoint<float> c = leaf.closest(best, x);
   out.distance = sqrtf(best2);
@@ -277,6 +287,17 @@ struct SegmentLeaves {
 
 GWNRT_HD inline NearestPrimitive unsigned_distance(const TriangleTreeView& tree, const vec3& x) {
   return detail::nearest_primitive(tree.bvh, tree.triangle_ids, x, detail::TriangleLeaves{tree.vertices});
+}
+
+// Whether some triangle lies within `radius` of x (squared distance at most radius², in float):
+// the nearest-first traversal with radius as its bound from the start, stopped at the first
+// triangle within it; far cheaper than the distance where none is near.
+GWNRT_HD inline bool any_within(const TriangleTreeView& tree, const vec3& x, float radius) {
+  float best2 = nextafterf(radius * radius, kInfinity);
+  uint32_t best;
+  detail::nearest_in_tree<detail::TriangleLeaves, detail::kDistanceLanes, true>(
+      tree.bvh, x, detail::TriangleLeaves{tree.vertices}, best2, best);
+  return best != kEmptyLane;
 }
 
 // Distance to ∂M; +inf for a closed mesh (∂M empty).

@@ -39,7 +39,11 @@ struct BlockRayChoice {
   float sign = 1.0f;
   BoxFieldBounds bounds;
 };
-GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block) {
+// With the bounds of boxes inside the block too, from the same traversals (box_field_bounds):
+// inner[k] holds where the block's bounds do.
+template <int N>
+GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block, const Aabb (&inner)[N],
+                                                BoxFieldBounds (&inner_bounds)[N]) {
   const vec3 centre = block.centre();
   float exit[6];
   for (int d = 0; d < 6; ++d)
@@ -51,15 +55,28 @@ GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aa
       order[j] = order[j - 1];
       order[j - 1] = t;
     }
+  Aabb boxes[N + 1];
+  boxes[0] = block;
+  for (int k = 0; k < N; ++k) boxes[k + 1] = inner[k];
   BlockRayChoice out;
   for (int i = 0; i < 6; ++i) {
     const int axis = order[i] / 2;
     const float sign = order[i] & 1 ? -1.0f : 1.0f;
-    const BoxFieldBounds bounds = box_field_bounds(model, block, axis, sign);
-    if (i == 0 || bounds.usable) out = {axis, sign, bounds};
-    if (bounds.usable) break;
+    BoxFieldBounds bounds[N + 1];
+    box_field_bounds(model, boxes, axis, sign, bounds);
+    if (i == 0 || bounds[0].usable) {
+      out = {axis, sign, bounds[0]};
+      for (int k = 0; k < N; ++k) inner_bounds[k] = bounds[k + 1];
+    }
+    if (bounds[0].usable) break;
   }
   return out;
+}
+
+GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block) {
+  const Aabb none[1] = {block};
+  BoxFieldBounds unused[1];
+  return choose_block_ray(model, block, none, unused);
 }
 
 // The jumps of `tree`'s triangles ahead of x along the ray (axis, sign).
@@ -135,8 +152,7 @@ struct ScoutQuery {
   GWNRT_HD Nearness nearness(const Aabb& block) const {
     const vec3 centre = block.centre();
     const float radius = kScoutSlack * 0.5f * glm::length(block.hi - block.lo);
-    if (unsigned_distance(use_sheets ? model.sheets : model.triangles, centre).distance <= radius)
-      return Nearness::kSheet;
+    if (any_within(use_sheets ? model.sheets : model.triangles, centre, radius)) return Nearness::kSheet;
     return level_set_distance_bound(model, centre, level, beta, radius) <= radius ? Nearness::kLevelSet
                                                                                   : Nearness::kFar;
   }
@@ -321,7 +337,7 @@ struct BlockWindingPass {
     w = BlockWinding{};
     const GridCoord b = view.grid.block_of_index(view.block_of_slot[slot]);
     const Aabb block = block_box(b);
-    choose_ray(block, w);
+    choose_ray(b, block, w);
     return b;
   }
 
@@ -336,7 +352,7 @@ struct BlockWindingPass {
     for (int i = 0; i < 8; ++i) {
       const Aabb mid = eighth_box(b, i);
       if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level)) continue;
-      w.bounds[1 + i] = box_field_bounds(model, mid, w.axis, w.sign);
+      if (!w.bounds[0].usable) w.bounds[1 + i] = box_field_bounds(model, mid, w.axis, w.sign);
       if (w.bounds[1 + i].usable) wanted |= 1u << i;
     }
     return wanted;
@@ -422,9 +438,15 @@ struct BlockWindingPass {
   }
 #endif
 
-  // The block's ray (choose_block_ray) and its bounds.
-  GWNRT_HD void choose_ray(const Aabb& block, BlockWinding& w) const {
-    const BlockRayChoice ray = choose_block_ray(model, block);
+  // The block's ray (choose_block_ray) and its bounds, and its eighths' where the block's are
+  // usable (from the same traversal; else each eighth's own, in wanted_eighths).
+  GWNRT_HD void choose_ray(const GridCoord& b, const Aabb& block, BlockWinding& w) const {
+    Aabb eighths[8];
+    for (int i = 0; i < 8; ++i) eighths[i] = eighth_box(b, i);
+    BoxFieldBounds eighth_bounds[8];
+    const BlockRayChoice ray = choose_block_ray(model, block, eighths, eighth_bounds);
+    if (ray.bounds.usable)
+      for (int i = 0; i < 8; ++i) w.bounds[1 + i] = eighth_bounds[i];
     w.axis = ray.axis;
     w.sign = ray.sign;
     w.bounds[0] = ray.bounds;
@@ -902,7 +924,7 @@ struct RootBatchPass {
       int count = 0;
       for (; i < end && count < int(kBlockItems); ++i)
         if (hermite[i].root_deferred) {
-          bracket[count] = deferred_bracket(hermite[i], view.grid.cell);
+          bracket[count] = edge_bracket(i);
           index[count++] = i;
         }
       int active[kBlockItems];
@@ -933,11 +955,31 @@ struct RootBatchPass {
     for (uint64_t i = first; i < end; ++i) {
       if (!hermite[i].root_deferred) continue;
       const Line l = line(i);
-      IllinoisBracket b = deferred_bracket(hermite[i], view.grid.cell);
+      IllinoisBracket b = edge_bracket(i);
       while (b.active()) b.take(root_search_value(model, l.at(b.next()), level));
       finish(i, b);
     }
 #endif
+  }
+
+  // Edge i's bracket; on a whole edge (no crossing of M on it), with its first point from the
+  // corner values along its line (interpolated_root_guess).
+  GWNRT_HD IllinoisBracket edge_bracket(uint64_t i) const {
+    const float h = view.grid.cell;
+    IllinoisBracket b = deferred_bracket(hermite[i], h);
+    if (b.ta != 0.0f || b.tb != h) return b;
+    const int axis = int(edges[i] % 4);
+    GridCoord before = view.coord_of_item(edges[i] / 4), after = before;
+    --before[axis];
+    after[axis] += 2;
+    float slope;
+    const float guess =
+        interpolated_root_guess(view.corner_value_at(before), b.fa, b.fb, view.corner_value_at(after), slope);
+    if (guess == guess) {
+      b.first_guess = h * guess;
+      b.slope = slope / h;
+    }
+    return b;
   }
 
   // The root of edge i's finished search, its normal deferred.

@@ -21,6 +21,11 @@ inline constexpr int kMaxRootSteps = 60;
 // this near its last point (regula falsi closes in from one side; on a scan that took 2.8
 // values a root instead of 6.8, docs/performance.md).
 inline constexpr float kRootTolerance = 1e-4f;
+// The search also stops where |w − w*| is this small: a tenth of the error of its w (within 1e-4
+// of the exact at kRootSearchConeBeta, below), which no further step could resolve. Where w's
+// slope is small, the bracket's criterion above would otherwise take its steps by halving a
+// bracket around noise: on a scan one root in fifteen took 5 to 60 values (docs/performance.md).
+inline constexpr float kRootValueTolerance = 1e-5f;
 // w is sampled this fraction of the edge before a crossing of M, for its value on the near
 // side (continuous up to the crossing: the cone's field and the other triangles'); intervals
 // between crossings shorter than twice this are taken as constant.
@@ -83,15 +88,19 @@ GWNRT_HD inline vec3 smooth_normal(const vec3& gradient, const vec3& fallback) {
 }
 
 // f = w − w* on the bracket [ta, tb] of one smooth interval (fa, fb of different signs, inside
-// meaning f > 0): Illinois' regula falsi, a bracketed secant method that needs w alone (a Newton
-// step needs ∇w, which the crossing method evaluates at a finer cone beta: several times w's
-// cost), stopped when the bracket is kRootTolerance of the edge (h) or the secant through its
-// ends puts the root that near the last point, or after kMaxRootSteps. One step at a time
-// (next, then take f there), so that the mesher can step many brackets together.
+// meaning f > 0), searched with w alone (a Newton step needs ∇w, which the crossing method
+// evaluates at a finer cone beta: several times w's cost): each point the secant through the
+// last two values (the first: a given guess and its slope, else the bracket's ends) where it
+// falls inside the bracket, else Illinois' regula falsi point; stopped when the local secant
+// puts the root within kRootTolerance of the edge (h) from the last point, the bracket is that
+// narrow, |f| is within kRootValueTolerance, or after kMaxRootSteps. One step at a time (next, then take f there), so
+// that the mesher can step many brackets together.
 struct IllinoisBracket {
   float ta = 0, fa = 0, tb = 0, fb = 0, h = 0;
-  float t = 0;   // the last point asked for
-  int side = 0;  // which end was kept last (Illinois halves the kept end's value)
+  float t = 0, ft = 0;                     // the last point asked for, and f there once taken
+  float first_guess = __builtin_nanf("");  // the first point, where inside the bracket
+  float slope = __builtin_nanf("");        // df/dt near t: the guess's, then the last two values' secant
+  int side = 0;                            // which end was kept last (Illinois halves the kept end's value)
   int steps = 0;
   bool a_inside = false, converged = false;
 
@@ -101,24 +110,32 @@ struct IllinoisBracket {
   GWNRT_HD bool active() const { return !converged && steps < kMaxRootSteps && tb - ta > kRootTolerance * h; }
   // The next point to evaluate f at.
   GWNRT_HD float next() {
-    t = fb != fa ? tb - fb * (tb - ta) / (fb - fa) : 0.5f * (ta + tb);
-    if (!(t > ta && t < tb)) t = 0.5f * (ta + tb);
-    return t;
+    float u = steps == 0 ? first_guess : t - ft / slope;
+    if (!(u > ta && u < tb)) {
+      u = fb != fa ? tb - fb * (tb - ta) / (fb - fa) : 0.5f * (ta + tb);
+      if (!(u > ta && u < tb)) u = 0.5f * (ta + tb);
+    }
+    if (steps > 0) previous = t, f_previous = ft;
+    return t = u;
   }
-  GWNRT_HD void take(float ft) {
-    if (fabsf(ft) * (tb - ta) <= kRootTolerance * h * fabsf(fb - fa)) {  // the secant's root within tolerance
+  GWNRT_HD void take(float f) {
+    ft = f;
+    // The local slope: the secant through the last two values, or the guess's.
+    if (steps > 0 && t != previous) slope = (f - f_previous) / (t - previous);
+    const float local = slope == slope && slope != 0.0f ? fabsf(slope) : fabsf(fb - fa) / (tb - ta);
+    if (fabsf(f) <= kRootTolerance * h * local || fabsf(f) <= kRootValueTolerance) {
       ta = tb = t;
       converged = true;
       return;
     }
-    if ((ft > 0.0f) == a_inside) {
+    if ((f > 0.0f) == a_inside) {
       ta = t;
-      fa = ft;
+      fa = f;
       if (side == -1) fb *= 0.5f;
       side = -1;
     } else {
       tb = t;
-      fb = ft;
+      fb = f;
       if (side == 1) fa *= 0.5f;
       side = 1;
     }
@@ -126,7 +143,45 @@ struct IllinoisBracket {
   }
   GWNRT_HD float root() const { return 0.5f * (ta + tb); }
   GWNRT_HD bool capped() const { return steps == kMaxRootSteps; }
+
+ private:
+  float previous = 0, f_previous = 0;
 };
+
+// A first point for the root search on a whole edge between corners of values f0 and f1 (of
+// different signs), from the values one corner before (fm1) and after (f2) on its line: the root
+// in (0, 1), in edge lengths, of the cubic through the four (the quadratic through three where
+// one is NaN or differs from the line through the edge's ends by half a jump or more, a crossing
+// of M beside the edge), or NaN; `slope`: the polynomial's there. Its error falls as h⁴ rather than the secant's h², so
+// the search often stops at its first value; a poor guess costs steps, never the bracket.
+GWNRT_HD inline float interpolated_root_guess(float fm1, float f0, float f1, float f2, float& slope) {
+  slope = __builtin_nanf("");
+  const bool use_before = fabsf(fm1 - (2.0f * f0 - f1)) < 0.5f, use_after = fabsf(f2 - (2.0f * f1 - f0)) < 0.5f;
+  if (!use_before && !use_after) return __builtin_nanf("");
+  // p(t) = f0 + c1 t + c2 t² + c3 t³ through the points used (Newton's divided differences).
+  const float d1 = f1 - f0;
+  float c1, c2, c3 = 0.0f;
+  if (use_before && use_after) {
+    c2 = 0.5f * (f1 - 2.0f * f0 + fm1);
+    c3 = (f2 - 3.0f * f1 + 3.0f * f0 - fm1) / 6.0f;
+    c1 = d1 - c2 - c3;
+  } else if (use_before) {
+    c2 = 0.5f * (f1 - 2.0f * f0 + fm1);
+    c1 = d1 - c2;
+  } else {
+    c2 = 0.5f * (f2 - 2.0f * f1 + f0);
+    c1 = d1 - c2;
+  }
+  float t = f0 / (f0 - f1);  // Newton on p from the secant's root, kept inside (0, 1)
+  for (int k = 0; k < 4; ++k) {
+    const float p = f0 + t * (c1 + t * (c2 + t * c3)), dp = c1 + t * (2.0f * c2 + 3.0f * t * c3);
+    if (!(dp != 0.0f)) return __builtin_nanf("");
+    t -= p / dp;
+    if (!(t > 0.0f && t < 1.0f)) return __builtin_nanf("");
+  }
+  slope = c1 + t * (2.0f * c2 + 3.0f * t * c3);
+  return t;
+}
 
 // The smooth root of a finished search on the edge from p0 along `direction`, with its normal
 // from ∇w there, or, deferred (normal_deferred), the fallback along the edge until then.
