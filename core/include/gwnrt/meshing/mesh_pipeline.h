@@ -232,7 +232,7 @@ Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& sc
           index[count8] = i;
           boxes[count8++] = box(c[i]);
         }
-        scout.may_meet_batch(boxes, count8, out);
+        scout.may_meet_batch(boxes, count8, out, level == 0);
         for (int k = 0; k < count8; ++k) m[index[k]] = out[k];
       });
       count = compact(
