@@ -300,32 +300,83 @@ TEST(UnsignedDistance, VerticesEdgesSliversTiesAndFarPoints) {
   }
 }
 
-// Whether a triangle lies within a radius (the scout's test) against the brute-force distance:
-// radii just below and above each point's distance, and random ones, at points near and on M.
-TEST(AnyWithin, MatchesTheBruteForceDistance) {
+// Whether triangle (a, b, c) meets box [lo, hi], in double by clipping it against the box's six
+// planes (Sutherland–Hodgman): independent of the separating axes of triangle_meets_box.
+bool clipped_triangle_meets_box(const dvec3& a, const dvec3& b, const dvec3& c, const dvec3& lo, const dvec3& hi) {
+  std::vector<dvec3> polygon = {a, b, c};
+  for (int axis = 0; axis < 3 && !polygon.empty(); ++axis)
+    for (const int side : {-1, 1}) {
+      const double bound = side < 0 ? lo[axis] : hi[axis];
+      const auto inside = [&](const dvec3& p) { return side < 0 ? p[axis] >= bound : p[axis] <= bound; };
+      std::vector<dvec3> kept;
+      for (size_t i = 0; i < polygon.size(); ++i) {
+        const dvec3 &p = polygon[i], &q = polygon[(i + 1) % polygon.size()];
+        if (inside(p)) kept.push_back(p);
+        if (inside(p) != inside(q)) kept.push_back(p + (q - p) * ((bound - p[axis]) / (q[axis] - p[axis])));
+      }
+      polygon = kept;
+      if (polygon.empty()) break;
+    }
+  return !polygon.empty();
+}
+
+// Triangles against boxes (random, and touching, piercing or just missing them), as clipping
+// in double decides where a box grown or shrunk by 1e-4 of its size gets the same answer.
+TEST(TriangleMeetsBox, MatchesClippingInDouble) {
+  test::Random rng(37);
+  int meets = 0, misses = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const vec3 centre(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const vec3 half(rng.uniform(0.05f, 1), rng.uniform(0.05f, 1), rng.uniform(0.05f, 1));
+    const float spread = k % 2 ? 0.3f : 2.0f;
+    vec3 v[3];
+    for (vec3& p : v)
+      p = vec3(rng.uniform(-spread, spread), rng.uniform(-spread, spread), rng.uniform(-spread, spread));
+    if (k % 5 == 0) v[2] = v[0] + 1e-3f * (v[1] - v[0]);  // nearly degenerate
+    const dvec3 lo = dvec3(centre - half), hi = dvec3(centre + half), grow = 1e-4 * dvec3(half);
+    const bool outer = clipped_triangle_meets_box(dvec3(v[0]), dvec3(v[1]), dvec3(v[2]), lo - grow, hi + grow);
+    const bool inner = clipped_triangle_meets_box(dvec3(v[0]), dvec3(v[1]), dvec3(v[2]), lo + grow, hi - grow);
+    if (outer != inner) continue;  // a touch: float's to call
+    EXPECT_EQ(detail::triangle_meets_box(v[0], v[1], v[2], centre, half), outer) << "case " << k;
+    ++(outer ? meets : misses);
+  }
+  EXPECT_GT(meets, 3000);
+  EXPECT_GT(misses, 3000);
+}
+
+// The scout's test over a mesh's tree: every box some triangle meets is reported (by clipping
+// each triangle), and a box reported is met by some triangle within its grown slack.
+TEST(AnyMeetsBox, MatchesTheTrianglesOneByOne) {
   const Mesh mesh = load_test_mesh("bunny_holes.obj");
   const GwnModel model = build_model(Mesh(mesh));
   const TriangleTreeView view = model.triangle_view();
   const Aabb box = mesh_bounds(mesh);
-  const float diag = glm::length(box.hi - box.lo);
-  test::Random rng(37);
-  int within = 0, beyond = 0;
-  for (int k = 0; k < 400; ++k) {
-    const vec3 x = k % 4 == 0 ? mesh.positions[size_t(rng.index(int(mesh.positions.size())))]
-                              : box.lo - 0.1f * diag + rng.uniform(0, 1.2f) * (box.hi - box.lo);
-    const double d = mesh_distance(mesh, dvec3(x));
-    // A few ulps of the box either side of the distance are the float test's to call.
-    const double slack = 1e-6 * diag;
-    for (const double radius : {d * 0.9 - slack, d * 1.1 + slack, double(rng.uniform(0, 0.3f * diag))}) {
-      if (radius < 0 || std::abs(radius - d) <= slack) continue;
-      const bool expected = d < radius;
-      EXPECT_EQ(any_within(view, x, float(radius)), expected)
-          << "point " << k << " distance " << d << " radius " << radius;
-      ++(expected ? within : beyond);
+  const vec3 size = box.hi - box.lo;
+  test::Random rng(39);
+  int met = 0, missed = 0;
+  for (int k = 0; k < 300; ++k) {
+    const vec3 lo =
+        box.lo - 0.1f * size + vec3(rng.uniform(0, 1.1f), rng.uniform(0, 1.1f), rng.uniform(0, 1.1f)) * size;
+    const vec3 hi = lo + rng.uniform(0.005f, 0.1f) * glm::length(size) * vec3(1.0f);
+    const auto any_clipped = [&](double grow) {
+      const dvec3 g = grow * dvec3(hi - lo);
+      for (const uvec3& t : mesh.triangles)
+        if (clipped_triangle_meets_box(dvec3(mesh.positions[t.x]), dvec3(mesh.positions[t.y]),
+                                       dvec3(mesh.positions[t.z]), dvec3(lo) - g, dvec3(hi) + g))
+          return true;
+      return false;
+    };
+    const bool reported = any_meets_box(view, Aabb{lo, hi});
+    if (any_clipped(0.0)) {
+      EXPECT_TRUE(reported) << "box " << k;
     }
+    if (reported) {
+      EXPECT_TRUE(any_clipped(2e-3)) << "box " << k;
+    }
+    ++(reported ? met : missed);
   }
-  EXPECT_GT(within, 100);
-  EXPECT_GT(beyond, 100);
+  EXPECT_GT(met, 30);
+  EXPECT_GT(missed, 30);
 }
 
 // The boundary's segments by both paths, against the brute force.

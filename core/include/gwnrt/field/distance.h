@@ -211,12 +211,14 @@ GWNRT_HD GWNRT_FORCEINLINE void nearest_in_leaf(const Leaf& leaf, uint32_t first
 
 // Near-first branch and bound over a wide BVH: a node's four boxes at once, a leaf's primitives
 // four at once (host), the nearest inner child popped next, and whatever is no nearer than the
-// best so far (best2 on entry: a bound) left unopened. `best`: the nearest primitive in leaf
-// order, or kEmptyLane; with StopAtFirst the first found within the bound instead.
-template <class Leaf, bool Lanes = kDistanceLanes, bool StopAtFirst = false>
-GWNRT_HD void nearest_in_tree(const BvhView& bvh, const vec3& x, const Leaf& leaf, float& best2, uint32_t& best) {
-  best = kEmptyLane;
-  if (bvh.node_count == 0) return;
+// best so far left unopened. The closest point of the nearest primitive (leaf order; ids maps to
+// the input index) is found last, once, by Leaf::closest.
+template <class Leaf, bool Lanes = kDistanceLanes>
+GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, const Leaf& leaf) {
+  NearestPrimitive out;
+  if (bvh.node_count == 0) return out;
+  float best2 = kInfinity;
+  uint32_t best = kEmptyLane;
   NearFirstEntry stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = {0, 0.0f};
@@ -230,25 +232,13 @@ GWNRT_HD void nearest_in_tree(const BvhView& bvh, const vec3& x, const Leaf& lea
     int inner_count = 0;
     for (int l = 0; l < kBvhWidth; ++l) {
       if (!(d2[l] < best2)) continue;
-      if (node.count[l] == 0) {
+      if (node.count[l] == 0)
         inner[inner_count++] = {node.child[l], d2[l]};
-      } else {
+      else
         nearest_in_leaf<Lanes>(leaf, node.child[l], node.count[l], x, best2, best);
-        if (StopAtFirst && best != kEmptyLane) return;
-      }
     }
     push_near_first(stack, sp, inner, inner_count);
   }
-}
-
-// The nearest primitive (leaf order; ids maps to the input index), its closest point found last,
-// once, by Leaf::closest.
-template <class Leaf, bool Lanes = kDistanceLanes>
-GWNRT_HD NearestPrimitive nearest_primitive(const BvhView& bvh, const uint32_t* ids, const vec3& x, const Leaf& leaf) {
-  NearestPrimitive out;
-  float best2 = kInfinity;
-  uint32_t best;
-  nearest_in_tree<Leaf, Lanes>(bvh, x, leaf, best2, best);
   if (best == kEmptyLane) return out;
   const ClosestPoint<float> c = leaf.closest(best, x);
   out.distance = sqrtf(best2);
@@ -289,15 +279,67 @@ GWNRT_HD inline NearestPrimitive unsigned_distance(const TriangleTreeView& tree,
   return detail::nearest_primitive(tree.bvh, tree.triangle_ids, x, detail::TriangleLeaves{tree.vertices});
 }
 
-// Whether some triangle lies within `radius` of x (squared distance at most radius², in float):
-// the nearest-first traversal with radius as its bound from the start, stopped at the first
-// triangle within it; far cheaper than the distance where none is near.
-GWNRT_HD inline bool any_within(const TriangleTreeView& tree, const vec3& x, float radius) {
-  float best2 = nextafterf(radius * radius, kInfinity);
-  uint32_t best;
-  detail::nearest_in_tree<detail::TriangleLeaves, detail::kDistanceLanes, true>(
-      tree.bvh, x, detail::TriangleLeaves{tree.vertices}, best2, best);
-  return best != kEmptyLane;
+namespace detail {
+
+// Whether triangle (a, b, c) meets the box of centre `centre` and half-extents `half` (the
+// separating axes: the box's three, the triangle's normal, the nine crosses of their edges); a
+// degenerate triangle is separated by fewer axes, so it may be taken to meet a box it misses.
+GWNRT_HD inline bool triangle_meets_box(const vec3& a, const vec3& b, const vec3& c, const vec3& centre,
+                                        const vec3& half) {
+  const vec3 v[3] = {a - centre, b - centre, c - centre};
+  for (int k = 0; k < 3; ++k)
+    if (min_of(min_of(v[0][k], v[1][k]), v[2][k]) > half[k] || max_of(max_of(v[0][k], v[1][k]), v[2][k]) < -half[k])
+      return false;
+  const vec3 edge[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  const auto separates = [&](const vec3& axis) {
+    const float p0 = glm::dot(axis, v[0]), p1 = glm::dot(axis, v[1]), p2 = glm::dot(axis, v[2]);
+    const float r = half.x * fabsf(axis.x) + half.y * fabsf(axis.y) + half.z * fabsf(axis.z);
+    return min_of(min_of(p0, p1), p2) > r || max_of(max_of(p0, p1), p2) < -r;
+  };
+  if (separates(glm::cross(edge[0], edge[1]))) return false;
+  for (int k = 0; k < 3; ++k)
+    for (int e = 0; e < 3; ++e) {
+      vec3 unit(0.0f);
+      unit[k] = 1.0f;
+      if (separates(glm::cross(unit, edge[e]))) return false;
+    }
+  return true;
+}
+
+}  // namespace detail
+
+// Whether some triangle meets `box` grown by a thousandth of its size and float round-off of its
+// coordinates (a box no triangle meets may still be reported met: a degenerate triangle near it).
+// Nodes whose boxes miss it are not opened; the first triangle that meets it ends the search.
+GWNRT_HD inline bool any_meets_box(const TriangleTreeView& tree, const Aabb& box) {
+  if (tree.bvh.node_count == 0) return false;
+  const vec3 centre = box.centre();
+  const vec3 extent = box.hi - box.lo;
+  const float round_off = 1e-6f * max_of(max_of(glm::length(box.lo), glm::length(box.hi)), glm::length(extent));
+  const vec3 half = 0.5f * extent + (1e-3f * max_of(max_of(extent.x, extent.y), extent.z) + round_off);
+  const Aabb grown{centre - half, centre + half};
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const WideNode& node = tree.bvh.nodes[stack[--sp]];
+    for (int lane = 0; lane < kBvhWidth; ++lane) {
+      if (node.child[lane] == kEmptyLane) continue;
+      bool meets = true;
+      for (int a = 0; a < 3; ++a) meets = meets && node.lo[a][lane] <= grown.hi[a] && node.hi[a][lane] >= grown.lo[a];
+      if (!meets) continue;
+      if (node.count[lane] == 0) {
+        if (sp == kTraversalStackSize) return true;  // not reached (a node pops one, pushes four); kept
+        stack[sp++] = node.child[lane];
+        continue;
+      }
+      for (uint32_t t = node.child[lane]; t < node.child[lane] + node.count[lane]; ++t)
+        if (detail::triangle_meets_box(tree.vertices[3 * t], tree.vertices[3 * t + 1], tree.vertices[3 * t + 2], centre,
+                                       half))
+          return true;
+    }
+  }
+  return false;
 }
 
 // Distance to ∂M; +inf for a closed mesh (∂M empty).

@@ -127,9 +127,9 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
 }
 #endif
 
-// Whether S may meet the box [lo, hi]: a lower bound on the distance from its centre to S, not
-// above its half-diagonal. S lies on the sheets (or on M, when the sheets were classified for
-// another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
+// Whether S may meet the box [lo, hi]: a sheet meets it, or a lower bound on the distance from
+// its centre to the level set is not above its half-diagonal. S lies on the sheets (or on M, when the sheets were
+// classified for another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
 struct ScoutQuery {
   ModelView model;
   float level = 0.5f;
@@ -146,14 +146,14 @@ struct ScoutQuery {
     return !(by_bounds && settle_by_bounds && settled_by_bounds({lo, hi}));
   }
 
-  // The distance tests alone: S farther than the block's half-diagonal, a sheet (or M) within
-  // it, or only the level set's bound keeping it. With `sheets_only` the level set's bound is
-  // not asked for (kLevelSet: it may keep the block).
+  // The distance tests alone: a sheet (or M) meeting the block, else S farther than the block's
+  // half-diagonal from its centre, or only the level set's bound keeping it. With `sheets_only` the level set's bound
+  // is not asked for (kLevelSet: it may keep the block).
   enum class Nearness { kFar, kSheet, kLevelSet };
   GWNRT_HD Nearness nearness(const Aabb& block, bool sheets_only = false) const {
     const vec3 centre = block.centre();
     const float radius = scout_radius(block);
-    if (any_within(use_sheets ? model.sheets : model.triangles, centre, radius)) return Nearness::kSheet;
+    if (any_meets_box(use_sheets ? model.sheets : model.triangles, block)) return Nearness::kSheet;
     return sheets_only || level_set_distance_bound(model, centre, level, beta, radius) <= radius ? Nearness::kLevelSet
                                                                                                  : Nearness::kFar;
   }
