@@ -32,23 +32,27 @@ struct BoundCounts {
   int boxes = 0, usable = 0, points = 0, settled = 0;
 };
 
+// A box 1/8 to 1/2^(2 + scales) of M's diagonal across, about a point of M (where S and ∂M are).
+Aabb random_box_on(const GwnModel& model, test::Random& rng, int scales) {
+  const float diagonal = glm::length(model.bounds().hi - model.bounds().lo);
+  const uvec3 t = model.mesh().triangles[rng.index(int(model.mesh().triangles.size()))];
+  const vec3 on = (model.mesh().positions[t.x] + model.mesh().positions[t.y] + model.mesh().positions[t.z]) / 3.0f;
+  const float half = diagonal * std::exp2(-float(3 + rng.index(scales))) * 0.5f;
+  Aabb box;
+  box.lo = on + vec3(rng.uniform(-half, 0), rng.uniform(-half, 0), rng.uniform(-half, 0)) * 2.0f;
+  box.hi = box.lo + vec3(2.0f * half);
+  return box;
+}
+
 BoundCounts check_bounds_on(const std::string& name, int box_count) {
   SCOPED_TRACE(name);
   const GwnModel model = test::build_model(test::load_test_mesh(name));
   const ModelView m = model.view();
   const ReferenceMesh ref = reference_mesh(model.mesh());
-  const Aabb bounds = model.bounds();
-  const float diagonal = glm::length(bounds.hi - bounds.lo);
   test::Random rng(11);
   BoundCounts counts;
   for (int i = 0; i < box_count; ++i) {
-    // Boxes 1/64 to 1/8 of the diagonal across, about a point of M (where S and ∂M are).
-    const uvec3 t = model.mesh().triangles[rng.index(int(model.mesh().triangles.size()))];
-    const vec3 on = (model.mesh().positions[t.x] + model.mesh().positions[t.y] + model.mesh().positions[t.z]) / 3.0f;
-    const float half = diagonal * std::exp2(-float(3 + rng.index(4))) * 0.5f;
-    Aabb box;
-    box.lo = on + vec3(rng.uniform(-half, 0), rng.uniform(-half, 0), rng.uniform(-half, 0)) * 2.0f;
-    box.hi = box.lo + vec3(2.0f * half);
+    const Aabb box = random_box_on(model, rng, 4);  // 1/64 to 1/8 of the diagonal
     const int axis = rng.index(3);
     const float sign = rng.index(2) ? 1.0f : -1.0f;
     ++counts.boxes;
@@ -104,17 +108,11 @@ TEST(BoxWinding, EighthsBoundsFromTheBoxsTraversalHoldOnEachEighth) {
     const GwnModel model = test::build_model(test::load_test_mesh(name));
     const ModelView m = model.view();
     const ReferenceMesh ref = reference_mesh(model.mesh());
-    const Aabb bounds = model.bounds();
-    const float diagonal = glm::length(bounds.hi - bounds.lo);
     test::Random rng(17);
     int usable = 0;
     for (int i = 0; i < 40; ++i) {
-      const uvec3 t = model.mesh().triangles[rng.index(int(model.mesh().triangles.size()))];
-      const vec3 on = (model.mesh().positions[t.x] + model.mesh().positions[t.y] + model.mesh().positions[t.z]) / 3.0f;
-      const float half = diagonal * std::exp2(-float(3 + rng.index(3))) * 0.5f;
       Aabb boxes[9];
-      boxes[0].lo = on + vec3(rng.uniform(-half, 0), rng.uniform(-half, 0), rng.uniform(-half, 0)) * 2.0f;
-      boxes[0].hi = boxes[0].lo + vec3(2.0f * half);
+      boxes[0] = random_box_on(model, rng, 3);
       const vec3 mid = boxes[0].centre();
       for (int k = 0; k < 8; ++k)
         for (int a = 0; a < 3; ++a) {
