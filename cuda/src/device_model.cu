@@ -50,8 +50,8 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
     const std::span<const ConeSegment> segments = model.cone_segments();
     for (Status s : {b->cone_lengths.upload(lengths.data(), lengths.size()),
                      b->cone_segments.upload(segments.data(), segments.size()), b->segment_nodes.upload(st.bvh.nodes),
-                     b->segment_lengths.upload(st.lengths), b->endpoints.upload(st.endpoints),
-                     b->segment_ids.upload(st.segment_ids),
+                     b->segment_lengths.upload(st.lengths), b->segment_net_lengths.upload(st.net_lengths),
+                     b->endpoints.upload(st.endpoints), b->segment_ids.upload(st.segment_ids),
                      b->smooth_regions.upload(model.smooth_regions().data(), model.smooth_regions().size()),
                      b->level_free.upload(model.level_free_cells().free.data(), model.level_free_cells().free.size())})
       if (!s.ok()) return s;
@@ -61,6 +61,7 @@ Status DeviceModel::upload(const GwnModel& model, DeviceModel& out) {
     v.cone_segments = b->cone_segments.get();
     v.boundary.bvh.nodes = b->segment_nodes.get();
     v.boundary.lengths = b->segment_lengths.get();
+    v.boundary.net_lengths = b->segment_net_lengths.get();
     v.boundary.endpoints = b->endpoints.get();
     v.boundary.segment_ids = b->segment_ids.get();
     v.ribbons = RibbonTreeView{};  // host only (model_view.h)

@@ -59,6 +59,7 @@ struct DeviceModel::Buffers {
   DeviceBuffer<ConeSegment> cone_segments;
   DeviceBuffer<WideNode> segment_nodes;
   DeviceBuffer<WideNodeLength> segment_lengths;
+  DeviceBuffer<WideNodeLength> segment_net_lengths;
   DeviceBuffer<vec3> endpoints;
   DeviceBuffer<uint32_t> segment_ids;
   DeviceBuffer<SmoothRegion> smooth_regions;

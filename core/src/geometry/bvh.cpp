@@ -220,4 +220,27 @@ std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)
   return lengths;
 }
 
+std::vector<WideNodeLength> lane_net_lengths(const WideBvh& bvh, std::span<const vec3> endpoints) {
+  std::vector<WideNodeLength> out(bvh.nodes.size(), WideNodeLength{});
+  auto node_net = [&](auto& self, uint32_t index) -> dvec3 {
+    const WideNode& node = bvh.nodes[index];
+    dvec3 total(0.0);
+    for (int l = 0; l < kBvhWidth; ++l) {
+      dvec3 lane(0.0);
+      if (node.count[l] > 0) {
+        for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i)
+          lane += dvec3(endpoints[2 * i + 1]) - dvec3(endpoints[2 * i]);
+      } else if (node.child[l] != kEmptyLane) {
+        lane = self(self, node.child[l]);
+      }
+      const double norm = glm::length(lane);
+      out[index].length[l] = norm > 0 ? std::nextafter(float(norm), kInfinity) : 0.0f;
+      total += lane;
+    }
+    return total;
+  };
+  if (!bvh.nodes.empty()) node_net(node_net, 0);
+  return out;
+}
+
 }  // namespace gwnrt

@@ -4,7 +4,8 @@
 namespace gwnrt {
 
 SegmentTreeView SegmentTree::view() const {
-  return {bvh.view(), endpoints.data(), segment_ids.data(), uint32_t(segment_ids.size()), lengths.data()};
+  return {bvh.view(),     endpoints.data(),  segment_ids.data(), uint32_t(segment_ids.size()),
+          lengths.data(), net_lengths.data()};
 }
 
 Status build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_size, SegmentTree& out) {
@@ -29,6 +30,7 @@ Status build_segment_tree(std::span<const vec3> endpoints, uint32_t max_leaf_siz
         return glm::length(dvec3(e[2 * s + 1]) - dvec3(e[2 * s]));
       },
       tree.endpoints.data());
+  tree.net_lengths = lane_net_lengths(tree.bvh, tree.endpoints);
   out = std::move(tree);
   return Status::Ok();
 }

@@ -85,18 +85,16 @@ GWNRT_HD inline float box_gap2(const vec3& lo, const vec3& hi, const Aabb& box) 
 
 }  // namespace detail
 
-// K = (1/4π) Σ length / gap² over ∂M's segments (gap: between the segment's box and the box) and
-// the Hessian's (1/4π) Σ 2 length / gap³ (the kernel (y − l)/|y − l|³ of ∇w has a derivative of
-// norm 2/|y − l|³) for boxes[0] and the boxes inside it at once, from one traversal: clusters
-// taken whole when their gap from boxes[0] is at least their box's diagonal, each box's term
-// with its own gap (no smaller); 0 for a closed mesh. The sums are in float, rounded up past
-// their error (terms·2⁻²⁴ relative). False when a segment's box meets `swept` (which holds
-// boxes[0]) or the caps are reached.
 namespace detail {
 
 // The sums of boundary_field_bounds for N boxes: Σ length / gap² and Σ length / gap³, a term
 // (a box holding segments, and their length) added to each box's sums with its gap from that
-// box (positive). Eight boxes to a vector where the host has them.
+// box (positive). A far cluster may take its expansion about its box's centre c instead, where
+// smaller: with L = Σ (b − a) over its segments and ρ the half-diagonal of its box, ∇w's kernel G
+// (norm 1/r²) differs from G at c by at most 2ρ/gap³ and its derivative by 6ρ/gap⁴ (the k-th
+// derivative of 1/r has norm k!/r^(k+1); c is no nearer than the gap), so the terms are
+// (|L| + 2·length·ρ/gap)/gap² and (|L| + 3·length·ρ/gap)/gap³: closed loops (L = 0) far away
+// fall as 1/gap³ and 1/gap⁴. Eight boxes to a vector where the host has them.
 template <int N>
 struct BoundSums {
 #if GWNRT_HOST_LANES && defined(__AVX__)
@@ -114,18 +112,30 @@ struct BoundSums {
       }
     }
   }
+  GWNRT_FORCEINLINE f8 gap2(int c, const vec3& term_lo, const vec3& term_hi) const {
+    f8 out{};
+    for (int a = 0; a < 3; ++a) {
+      const f8 below = splat<f8>(term_lo[a]) - hi[a][c], above = lo[a][c] - term_hi[a];
+      const f8 larger = lane_select(below > above, below, above);
+      const f8 gap = lane_select(larger > 0.0f, larger, f8{});
+      out += gap * gap;
+    }
+    return out;
+  }
   GWNRT_FORCEINLINE void add(const vec3& term_lo, const vec3& term_hi, float length) {
     for (int c = 0; c < kChunks; ++c) {
-      f8 gap2{};
-      for (int a = 0; a < 3; ++a) {
-        const f8 below = splat<f8>(term_lo[a]) - hi[a][c], above = lo[a][c] - term_hi[a];
-        const f8 larger = lane_select(below > above, below, above);
-        const f8 gap = lane_select(larger > 0.0f, larger, f8{});
-        gap2 += gap * gap;
-      }
-      const f8 term = length / gap2;
+      const f8 g2 = gap2(c, term_lo, term_hi);
+      const f8 term = length / g2;
       sum[c] += term;
-      sum3[c] += term / lane_sqrt(gap2);
+      sum3[c] += term / lane_sqrt(g2);
+    }
+  }
+  GWNRT_FORCEINLINE void add_cluster(const vec3& term_lo, const vec3& term_hi, float length, float net, float rho) {
+    for (int c = 0; c < kChunks; ++c) {
+      const f8 inverse2 = 1.0f / gap2(c, term_lo, term_hi), inverse = lane_sqrt(inverse2);
+      const f8 expanded = net + 2.0f * length * rho * inverse, expanded3 = net + 3.0f * length * rho * inverse;
+      sum[c] += lane_select(expanded < length, expanded, splat<f8>(length)) * inverse2;
+      sum3[c] += lane_select(expanded3 < length, expanded3, splat<f8>(length)) * inverse2 * inverse;
     }
   }
   float gradient_sum(int k) const { return sum[k / 8][k % 8]; }
@@ -141,16 +151,27 @@ struct BoundSums {
       }
     }
   }
+  GWNRT_HD float gap2(int k, const vec3& term_lo, const vec3& term_hi) const {
+    float out = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+      const float gap = max_of(max_of(term_lo[a] - hi[a][k], lo[a][k] - term_hi[a]), 0.0f);
+      out += gap * gap;
+    }
+    return out;
+  }
   GWNRT_HD void add(const vec3& term_lo, const vec3& term_hi, float length) {
     for (int k = 0; k < N; ++k) {
-      float gap2 = 0.0f;
-      for (int a = 0; a < 3; ++a) {
-        const float gap = max_of(max_of(term_lo[a] - hi[a][k], lo[a][k] - term_hi[a]), 0.0f);
-        gap2 += gap * gap;
-      }
-      const float term = length / gap2;
+      const float g2 = gap2(k, term_lo, term_hi);
+      const float term = length / g2;
       sum[k] += term;
-      sum3[k] += term / sqrtf(gap2);
+      sum3[k] += term / sqrtf(g2);
+    }
+  }
+  GWNRT_HD void add_cluster(const vec3& term_lo, const vec3& term_hi, float length, float net, float rho) {
+    for (int k = 0; k < N; ++k) {
+      const float inverse2 = 1.0f / gap2(k, term_lo, term_hi), inverse = sqrtf(inverse2);
+      sum[k] += min_of(net + 2.0f * length * rho * inverse, length) * inverse2;
+      sum3[k] += min_of(net + 3.0f * length * rho * inverse, length) * inverse2 * inverse;
     }
   }
   GWNRT_HD float gradient_sum(int k) const { return sum[k]; }
@@ -164,9 +185,9 @@ struct BoundSums {
 // the Hessian's (1/4π) Σ 2 length / gap³ (the kernel (y − l)/|y − l|³ of ∇w has a derivative of
 // norm 2/|y − l|³) for boxes[0] and the boxes inside it at once, from one traversal: clusters
 // taken whole when their gap from boxes[0] is at least their box's diagonal, each box's term
-// with its own gap (no smaller); 0 for a closed mesh. The sums are in float, rounded up past
-// their error (terms·2⁻²⁴ relative). False when a segment's box meets `swept` (which holds
-// boxes[0]) or the caps are reached.
+// with its own gap (no smaller), or its expansion where smaller (BoundSums); 0 for a closed
+// mesh. The sums are in float, rounded up past their error (terms·2⁻²⁴ relative). False when a
+// segment's box meets `swept` (which holds boxes[0]) or the caps are reached.
 template <int N>
 GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, const Aabb (&boxes)[N], const Aabb& swept,
                                            float (&gradient_bound)[N], float (&hessian_bound)[N]) {
@@ -196,8 +217,15 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
           diagonal2 += e * e;
         }
         if (gap2 >= diagonal2 && gap2 > 0.0f) {
-          add(vec3(node.lo[0][lane], node.lo[1][lane], node.lo[2][lane]),
-              vec3(node.hi[0][lane], node.hi[1][lane], node.hi[2][lane]), boundary.lengths[index].length[lane]);
+          const vec3 lane_lo(node.lo[0][lane], node.lo[1][lane], node.lo[2][lane]),
+              lane_hi(node.hi[0][lane], node.hi[1][lane], node.hi[2][lane]);
+          const float length = boundary.lengths[index].length[lane];
+          if (boundary.net_lengths)  // ρ: the half-diagonal, rounded up
+            sums.add_cluster(lane_lo, lane_hi, length, boundary.net_lengths[index].length[lane],
+                             0.5f * sqrtf(diagonal2) * (1.0f + 0x1p-20f));
+          else
+            sums.add(lane_lo, lane_hi, length);
+          ++terms;
           continue;
         }
       }

@@ -98,6 +98,9 @@ struct SegmentTreeView {
   const uint32_t* segment_ids = nullptr;  // leaf order -> boundary segment index
   uint32_t segment_count = 0;
   const WideNodeLength* lengths = nullptr;  // per node, parallel to bvh.nodes
+  // Per node: |Σ (b − a)| over the segments below each lane (rounded up), for the far field of a
+  // cluster of closed loops (field/box_winding.h); may be null.
+  const WideNodeLength* net_lengths = nullptr;
 };
 
 // Per lane of the ribbon tree (geometry/ribbon_tree.h, field/ribbon_winding.h): the apex z of the fan
@@ -164,5 +167,9 @@ Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_
 // that it still bounds the true total (the bounds it enters must not shrink).
 std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)(const void* context, uint32_t i),
                                          const void* context);
+
+// Per node, |Σ (b − a)| over the segments (a, b) = (endpoints[2i], endpoints[2i + 1]), leaf order,
+// below each lane: summed in double, each lane's float rounded up.
+std::vector<WideNodeLength> lane_net_lengths(const WideBvh& bvh, std::span<const vec3> endpoints);
 
 }  // namespace gwnrt

@@ -13,9 +13,10 @@ namespace gwnrt {
 
 struct SegmentTree {
   WideBvh bvh;
-  std::vector<vec3> endpoints;          // 2 per segment, leaf order
-  std::vector<uint32_t> segment_ids;    // leaf order -> segment index
-  std::vector<WideNodeLength> lengths;  // per node: the length of ∂M below each lane (rounded up)
+  std::vector<vec3> endpoints;              // 2 per segment, leaf order
+  std::vector<uint32_t> segment_ids;        // leaf order -> segment index
+  std::vector<WideNodeLength> lengths;      // per node: the length of ∂M below each lane (rounded up)
+  std::vector<WideNodeLength> net_lengths;  // per node: |Σ (b − a)| below each lane (rounded up)
   SegmentTreeView view() const;
 };
 
