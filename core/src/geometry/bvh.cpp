@@ -198,49 +198,45 @@ Status build_wide_bvh(std::span<const Aabb> primitive_bounds, uint32_t max_leaf_
   return Status::Ok();
 }
 
-std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)(const void* context, uint32_t i),
-                                         const void* context) {
-  std::vector<WideNodeLength> lengths(bvh.nodes.size(), WideNodeLength{});
-  auto node_length = [&](auto& self, uint32_t index) -> double {
+namespace {
+
+// Per node, for each lane, the norm of the total of value_of(primitive in leaf order) below it:
+// bottom-up in double, each lane's float rounded up.
+template <class Total, class ValueOf, class Norm>
+std::vector<WideNodeLength> lane_totals(const WideBvh& bvh, ValueOf value_of, Norm norm) {
+  std::vector<WideNodeLength> out(bvh.nodes.size(), WideNodeLength{});
+  auto node_total = [&](auto& self, uint32_t index) -> Total {
     const WideNode& node = bvh.nodes[index];
-    double total = 0;
+    Total total{};
     for (int l = 0; l < kBvhWidth; ++l) {
-      double lane = 0;
+      Total lane{};
       if (node.count[l] > 0) {
-        for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) lane += length_of(context, i);
+        for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i) lane += value_of(i);
       } else if (node.child[l] != kEmptyLane) {
         lane = self(self, node.child[l]);
       }
-      lengths[index].length[l] = lane > 0 ? std::nextafter(float(lane), kInfinity) : 0.0f;
+      const double size = norm(lane);
+      out[index].length[l] = size > 0 ? std::nextafter(float(size), kInfinity) : 0.0f;
       total += lane;
     }
     return total;
   };
-  if (!bvh.nodes.empty()) node_length(node_length, 0);
-  return lengths;
+  if (!bvh.nodes.empty()) node_total(node_total, 0);
+  return out;
+}
+
+}  // namespace
+
+std::vector<WideNodeLength> lane_lengths(const WideBvh& bvh, double (*length_of)(const void* context, uint32_t i),
+                                         const void* context) {
+  return lane_totals<double>(
+      bvh, [&](uint32_t i) { return length_of(context, i); }, [](double x) { return x; });
 }
 
 std::vector<WideNodeLength> lane_net_lengths(const WideBvh& bvh, std::span<const vec3> endpoints) {
-  std::vector<WideNodeLength> out(bvh.nodes.size(), WideNodeLength{});
-  auto node_net = [&](auto& self, uint32_t index) -> dvec3 {
-    const WideNode& node = bvh.nodes[index];
-    dvec3 total(0.0);
-    for (int l = 0; l < kBvhWidth; ++l) {
-      dvec3 lane(0.0);
-      if (node.count[l] > 0) {
-        for (uint32_t i = node.child[l]; i < node.child[l] + node.count[l]; ++i)
-          lane += dvec3(endpoints[2 * i + 1]) - dvec3(endpoints[2 * i]);
-      } else if (node.child[l] != kEmptyLane) {
-        lane = self(self, node.child[l]);
-      }
-      const double norm = glm::length(lane);
-      out[index].length[l] = norm > 0 ? std::nextafter(float(norm), kInfinity) : 0.0f;
-      total += lane;
-    }
-    return total;
-  };
-  if (!bvh.nodes.empty()) node_net(node_net, 0);
-  return out;
+  return lane_totals<dvec3>(
+      bvh, [&](uint32_t i) { return dvec3(endpoints[2 * i + 1]) - dvec3(endpoints[2 * i]); },
+      [](const dvec3& v) { return glm::length(v); });
 }
 
 }  // namespace gwnrt

@@ -68,12 +68,6 @@ GWNRT_HD inline float lane_box_gap2(const WideNode& node, int lane, const Aabb& 
   return d2;
 }
 
-GWNRT_HD inline bool lane_meets_box(const WideNode& node, int lane, const Aabb& box) {
-  for (int a = 0; a < 3; ++a)
-    if (node.lo[a][lane] > box.hi[a] || node.hi[a][lane] < box.lo[a]) return false;
-  return true;
-}
-
 GWNRT_HD inline float box_gap2(const vec3& lo, const vec3& hi, const Aabb& box) {
   float d2 = 0.0f;
   for (int a = 0; a < 3; ++a) {
@@ -83,9 +77,12 @@ GWNRT_HD inline float box_gap2(const vec3& lo, const vec3& hi, const Aabb& box) 
   return d2;
 }
 
-}  // namespace detail
-
-namespace detail {
+// BoundSums' boxes: eight to a vector where the host has them, else one by one.
+#if GWNRT_HOST_LANES && defined(__AVX__)
+using BoundLanes = f8;
+#else
+using BoundLanes = float;
+#endif
 
 // The sums of boundary_field_bounds for N boxes: Σ length / gap² and Σ length / gap³, a term
 // (a box holding segments, and their length) added to each box's sums with its gap from that
@@ -94,89 +91,69 @@ namespace detail {
 // (norm 1/r²) differs from G at c by at most 2ρ/gap³ and its derivative by 6ρ/gap⁴ (the k-th
 // derivative of 1/r has norm k!/r^(k+1); c is no nearer than the gap), so the terms are
 // (|L| + 2·length·ρ/gap)/gap² and (|L| + 3·length·ρ/gap)/gap³: closed loops (L = 0) far away
-// fall as 1/gap³ and 1/gap⁴. Eight boxes to a vector where the host has them.
-template <int N>
+// fall as 1/gap³ and 1/gap⁴.
+template <int N, class V = BoundLanes>
 struct BoundSums {
-#if GWNRT_HOST_LANES && defined(__AVX__)
-  static constexpr int kChunks = (N + 7) / 8;
-  f8 lo[3][kChunks], hi[3][kChunks], sum[kChunks], sum3[kChunks];
-  explicit BoundSums(const Aabb (&boxes)[N]) {
+  static constexpr int kWidth = int(sizeof(V) / sizeof(float));
+  static constexpr int kChunks = (N + kWidth - 1) / kWidth;
+  V lo[3][kChunks], hi[3][kChunks], sum[kChunks], sum3[kChunks];
+  uint32_t terms = 0;
+
+  GWNRT_HD explicit BoundSums(const Aabb (&boxes)[N]) {
     for (int c = 0; c < kChunks; ++c) {
-      sum[c] = sum3[c] = f8{};
-      for (int l = 0; l < 8; ++l) {
-        const Aabb& box = boxes[8 * c + l < N ? 8 * c + l : N - 1];  // lanes past N repeat the last box
-        for (int a = 0; a < 3; ++a) {
-          lo[a][c][l] = box.lo[a];
-          hi[a][c][l] = box.hi[a];
+      sum[c] = sum3[c] = V{};
+      for (int a = 0; a < 3; ++a) {
+        if constexpr (kWidth == 1) {
+          lo[a][c] = boxes[c].lo[a];
+          hi[a][c] = boxes[c].hi[a];
+        } else {
+          for (int l = 0; l < kWidth; ++l) {
+            const Aabb& box = boxes[kWidth * c + l < N ? kWidth * c + l : N - 1];  // lanes past N repeat the last
+            lo[a][c][l] = box.lo[a];
+            hi[a][c][l] = box.hi[a];
+          }
         }
       }
     }
   }
-  GWNRT_FORCEINLINE f8 gap2(int c, const vec3& term_lo, const vec3& term_hi) const {
-    f8 out{};
+  GWNRT_HD GWNRT_FORCEINLINE V gap2(int c, const vec3& term_lo, const vec3& term_hi) const {
+    V out{};
     for (int a = 0; a < 3; ++a) {
-      const f8 below = splat<f8>(term_lo[a]) - hi[a][c], above = lo[a][c] - term_hi[a];
-      const f8 larger = lane_select(below > above, below, above);
-      const f8 gap = lane_select(larger > 0.0f, larger, f8{});
+      const V below = term_lo[a] - hi[a][c], above = lo[a][c] - term_hi[a];
+      const V larger = lane_select(below > above, below, above);
+      const V gap = lane_select(larger > 0.0f, larger, V{});
       out += gap * gap;
     }
     return out;
   }
-  GWNRT_FORCEINLINE void add(const vec3& term_lo, const vec3& term_hi, float length) {
+  GWNRT_HD GWNRT_FORCEINLINE void add(const vec3& term_lo, const vec3& term_hi, float length) {
     for (int c = 0; c < kChunks; ++c) {
-      const f8 g2 = gap2(c, term_lo, term_hi);
-      const f8 term = length / g2;
+      const V g2 = gap2(c, term_lo, term_hi);
+      const V term = length / g2;
       sum[c] += term;
       sum3[c] += term / lane_sqrt(g2);
     }
+    ++terms;
   }
-  GWNRT_FORCEINLINE void add_cluster(const vec3& term_lo, const vec3& term_hi, float length, float net, float rho) {
+  GWNRT_HD GWNRT_FORCEINLINE void add_cluster(const vec3& term_lo, const vec3& term_hi, float length, float net,
+                                              float rho) {
+    const V whole = V{} + length;
     for (int c = 0; c < kChunks; ++c) {
-      const f8 inverse2 = 1.0f / gap2(c, term_lo, term_hi), inverse = lane_sqrt(inverse2);
-      const f8 expanded = net + 2.0f * length * rho * inverse, expanded3 = net + 3.0f * length * rho * inverse;
-      sum[c] += lane_select(expanded < length, expanded, splat<f8>(length)) * inverse2;
-      sum3[c] += lane_select(expanded3 < length, expanded3, splat<f8>(length)) * inverse2 * inverse;
+      const V inverse2 = 1.0f / gap2(c, term_lo, term_hi), inverse = lane_sqrt(inverse2);
+      const V expanded = net + 2.0f * length * rho * inverse, expanded3 = net + 3.0f * length * rho * inverse;
+      sum[c] += lane_select(expanded < whole, expanded, whole) * inverse2;
+      sum3[c] += lane_select(expanded3 < whole, expanded3, whole) * inverse2 * inverse;
     }
+    ++terms;
   }
-  float gradient_sum(int k) const { return sum[k / 8][k % 8]; }
-  float hessian_sum(int k) const { return sum3[k / 8][k % 8]; }
-#else
-  float lo[3][N], hi[3][N], sum[N], sum3[N];
-  GWNRT_HD explicit BoundSums(const Aabb (&boxes)[N]) {
-    for (int k = 0; k < N; ++k) {
-      sum[k] = sum3[k] = 0.0f;
-      for (int a = 0; a < 3; ++a) {
-        lo[a][k] = boxes[k].lo[a];
-        hi[a][k] = boxes[k].hi[a];
-      }
-    }
+  GWNRT_HD float gradient_sum(int k) const { return lane_of(sum[k / kWidth], k % kWidth); }
+  GWNRT_HD float hessian_sum(int k) const { return lane_of(sum3[k / kWidth], k % kWidth); }
+  GWNRT_HD static float lane_of(const V& v, int l) {
+    if constexpr (kWidth == 1)
+      return v;
+    else
+      return v[l];
   }
-  GWNRT_HD float gap2(int k, const vec3& term_lo, const vec3& term_hi) const {
-    float out = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-      const float gap = max_of(max_of(term_lo[a] - hi[a][k], lo[a][k] - term_hi[a]), 0.0f);
-      out += gap * gap;
-    }
-    return out;
-  }
-  GWNRT_HD void add(const vec3& term_lo, const vec3& term_hi, float length) {
-    for (int k = 0; k < N; ++k) {
-      const float g2 = gap2(k, term_lo, term_hi);
-      const float term = length / g2;
-      sum[k] += term;
-      sum3[k] += term / sqrtf(g2);
-    }
-  }
-  GWNRT_HD void add_cluster(const vec3& term_lo, const vec3& term_hi, float length, float net, float rho) {
-    for (int k = 0; k < N; ++k) {
-      const float inverse2 = 1.0f / gap2(k, term_lo, term_hi), inverse = sqrtf(inverse2);
-      sum[k] += min_of(net + 2.0f * length * rho * inverse, length) * inverse2;
-      sum3[k] += min_of(net + 3.0f * length * rho * inverse, length) * inverse2 * inverse;
-    }
-  }
-  GWNRT_HD float gradient_sum(int k) const { return sum[k]; }
-  GWNRT_HD float hessian_sum(int k) const { return sum3[k]; }
-#endif
 };
 
 }  // namespace detail
@@ -195,11 +172,6 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
   if (boundary.segment_count == 0 || boundary.bvh.node_count == 0) return true;
   if (!boundary.lengths) return false;
   detail::BoundSums<N> sums(boxes);
-  uint32_t terms = 0;
-  const auto add = [&](const vec3& term_lo, const vec3& term_hi, float length) {
-    sums.add(term_lo, term_hi, length);
-    ++terms;
-  };
   uint32_t stack[kTraversalStackSize];
   int sp = 0;
   stack[sp++] = 0;
@@ -209,7 +181,7 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
     const WideNode& node = boundary.bvh.nodes[index];
     for (int lane = 0; lane < kBvhWidth; ++lane) {
       if (node.child[lane] == kEmptyLane) continue;
-      if (!detail::lane_meets_box(node, lane, swept)) {
+      if (!lane_meets_box(node, lane, swept)) {
         const float gap2 = detail::lane_box_gap2(node, lane, boxes[0]);
         float diagonal2 = 0.0f;
         for (int a = 0; a < 3; ++a) {
@@ -225,7 +197,6 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
                              0.5f * sqrtf(diagonal2) * (1.0f + 0x1p-20f));
           else
             sums.add(lane_lo, lane_hi, length);
-          ++terms;
           continue;
         }
       }
@@ -239,12 +210,12 @@ GWNRT_HD inline bool boundary_field_bounds(const SegmentTreeView& boundary, cons
         const vec3 a = boundary.endpoints[2 * s], b = boundary.endpoints[2 * s + 1];
         const vec3 segment_lo = glm::min(a, b), segment_hi = glm::max(a, b);
         if (detail::box_gap2(segment_lo, segment_hi, swept) == 0.0f) return false;  // ∂M in the swept box
-        add(segment_lo, segment_hi, glm::length(b - a));
+        sums.add(segment_lo, segment_hi, glm::length(b - a));
       }
     }
   }
   // Each term is off by a few roundings and the sum by one per term, all relative.
-  const float round_up = 1.0f + float(terms + 8) * 0x1p-23f;
+  const float round_up = 1.0f + float(sums.terms + 8) * 0x1p-23f;
   for (int k = 0; k < N; ++k) {
     gradient_bound[k] = sums.gradient_sum(k) * float(0.25 * kInvPi) * round_up;
     hessian_bound[k] = sums.hessian_sum(k) * float(0.5 * kInvPi) * round_up;

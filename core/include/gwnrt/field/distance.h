@@ -325,9 +325,7 @@ GWNRT_HD inline bool any_meets_box(const TriangleTreeView& tree, const Aabb& box
     const WideNode& node = tree.bvh.nodes[stack[--sp]];
     for (int lane = 0; lane < kBvhWidth; ++lane) {
       if (node.child[lane] == kEmptyLane) continue;
-      bool meets = true;
-      for (int a = 0; a < 3; ++a) meets = meets && node.lo[a][lane] <= grown.hi[a] && node.hi[a][lane] >= grown.lo[a];
-      if (!meets) continue;
+      if (!lane_meets_box(node, lane, grown)) continue;
       if (node.count[lane] == 0) {
         if (sp == kTraversalStackSize) return true;  // not reached (a node pops one, pushes four); kept
         stack[sp++] = node.child[lane];

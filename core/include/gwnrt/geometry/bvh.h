@@ -149,6 +149,13 @@ struct Aabb {
   }
 };
 
+// Whether a node's lane box and `box` (both closed) share a point.
+GWNRT_HD inline bool lane_meets_box(const WideNode& node, int lane, const Aabb& box) {
+  for (int a = 0; a < 3; ++a)
+    if (node.lo[a][lane] > box.hi[a] || node.hi[a][lane] < box.lo[a]) return false;
+  return true;
+}
+
 // Owning topology + bounds, built in parallel by median splits on primitive centroids.
 struct WideBvh {
   std::vector<WideNode> nodes;

@@ -39,12 +39,12 @@ struct BlockRayChoice {
   float sign = 1.0f;
   BoxFieldBounds bounds;
 };
-// With the bounds of boxes inside the block too, from the same traversals (box_field_bounds):
-// inner[k] holds where the block's bounds do.
+// boxes[0] is the block; with the bounds of boxes inside it too (boxes[1...]), from the same
+// traversals (box_field_bounds): bounds[k] holds where the block's do.
 template <int N>
-GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block, const Aabb (&inner)[N],
-                                                BoxFieldBounds (&inner_bounds)[N]) {
-  const vec3 centre = block.centre();
+GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb (&boxes)[N],
+                                                BoxFieldBounds (&bounds)[N]) {
+  const vec3 centre = boxes[0].centre();
   float exit[6];
   for (int d = 0; d < 6; ++d)
     exit[d] = d & 1 ? centre[d / 2] - model.bounds.lo[d / 2] : model.bounds.hi[d / 2] - centre[d / 2];
@@ -55,28 +55,25 @@ GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aa
       order[j] = order[j - 1];
       order[j - 1] = t;
     }
-  Aabb boxes[N + 1];
-  boxes[0] = block;
-  for (int k = 0; k < N; ++k) boxes[k + 1] = inner[k];
   BlockRayChoice out;
   for (int i = 0; i < 6; ++i) {
     const int axis = order[i] / 2;
     const float sign = order[i] & 1 ? -1.0f : 1.0f;
-    BoxFieldBounds bounds[N + 1];
-    box_field_bounds(model, boxes, axis, sign, bounds);
-    if (i == 0 || bounds[0].usable) {
-      out = {axis, sign, bounds[0]};
-      for (int k = 0; k < N; ++k) inner_bounds[k] = bounds[k + 1];
+    BoxFieldBounds tried[N];
+    box_field_bounds(model, boxes, axis, sign, tried);
+    if (i == 0 || tried[0].usable) {
+      out = {axis, sign, tried[0]};
+      for (int k = 0; k < N; ++k) bounds[k] = tried[k];
     }
-    if (bounds[0].usable) break;
+    if (tried[0].usable) break;
   }
   return out;
 }
 
 GWNRT_HD inline BlockRayChoice choose_block_ray(const ModelView& model, const Aabb& block) {
-  const Aabb none[1] = {block};
-  BoxFieldBounds unused[1];
-  return choose_block_ray(model, block, none, unused);
+  const Aabb boxes[1] = {block};
+  BoxFieldBounds bounds[1];
+  return choose_block_ray(model, boxes, bounds);
 }
 
 // The jumps of `tree`'s triangles ahead of x along the ray (axis, sign).
@@ -151,14 +148,13 @@ struct ScoutQuery {
   // is not asked for (kLevelSet: it may keep the block).
   enum class Nearness { kFar, kSheet, kLevelSet };
   GWNRT_HD Nearness nearness(const Aabb& block, bool sheets_only = false) const {
-    const vec3 centre = block.centre();
-    const float radius = scout_radius(block);
     if (any_meets_box(use_sheets ? model.sheets : model.triangles, block)) return Nearness::kSheet;
-    return sheets_only || level_set_distance_bound(model, centre, level, beta, radius) <= radius ? Nearness::kLevelSet
-                                                                                                 : Nearness::kFar;
+    return sheets_only || level_set_keeps(block) ? Nearness::kLevelSet : Nearness::kFar;
   }
-  GWNRT_HD static float scout_radius(const Aabb& block) {
-    return kScoutSlack * 0.5f * glm::length(block.hi - block.lo);
+  // Whether the level set's distance bound from the block's centre is within its half-diagonal.
+  GWNRT_HD bool level_set_keeps(const Aabb& block) const {
+    const float radius = kScoutSlack * 0.5f * glm::length(block.hi - block.lo);
+    return level_set_distance_bound(model, block.centre(), level, beta, radius) <= radius;
   }
 
   // No sheet within the block (the caller's distance), and ŵ's range over it holds no w* + n:
@@ -187,7 +183,7 @@ struct ScoutQuery {
       if (near != Nearness::kLevelSet || !settle_by_bounds) continue;
       const BlockRayChoice ray = choose_block_ray(model, blocks[k]);
       if (!ray.bounds.usable) {
-        out[k] = !bounds_first || nearness(blocks[k]) != Nearness::kFar;
+        out[k] = !bounds_first || level_set_keeps(blocks[k]);
         continue;
       }
       centre[count] = blocks[k].centre();
@@ -202,8 +198,7 @@ struct ScoutQuery {
     for (int j = 0; j < count; ++j) {
       const Aabb& block = blocks[pending[j]];
       out[pending[j]] = !(ok[j] && !taylor_may_leave_unsettled(p[j], bounds[j], centre[j], block, level)) &&
-                        (!bounds_first || level_set_distance_bound(model, centre[j], level, beta,
-                                                                   scout_radius(block)) <= scout_radius(block));
+                        (!bounds_first || level_set_keeps(block));
     }
   }
 #endif
@@ -454,12 +449,13 @@ struct BlockWindingPass {
   // The block's ray (choose_block_ray) and its bounds, and its eighths' where the block's are
   // usable (from the same traversal; else each eighth's own, in wanted_eighths).
   GWNRT_HD void choose_ray(const GridCoord& b, const Aabb& block, BlockWinding& w) const {
-    Aabb eighths[8];
-    for (int i = 0; i < 8; ++i) eighths[i] = eighth_box(b, i);
-    BoxFieldBounds eighth_bounds[8];
-    const BlockRayChoice ray = choose_block_ray(model, block, eighths, eighth_bounds);
+    Aabb boxes[kBlockWindingPoints];  // the block and its eighths, as w.bounds holds them
+    boxes[0] = block;
+    for (int i = 0; i < 8; ++i) boxes[1 + i] = eighth_box(b, i);
+    BoxFieldBounds bounds[kBlockWindingPoints];
+    const BlockRayChoice ray = choose_block_ray(model, boxes, bounds);
     if (ray.bounds.usable)
-      for (int i = 0; i < 8; ++i) w.bounds[1 + i] = eighth_bounds[i];
+      for (int i = 0; i < 8; ++i) w.bounds[1 + i] = bounds[1 + i];
     w.axis = ray.axis;
     w.sign = ray.sign;
     w.bounds[0] = ray.bounds;
