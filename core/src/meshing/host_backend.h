@@ -1,5 +1,6 @@
 // The mesher's CPU backend (meshing/mesh_pipeline.h): TBB's parallel_for and parallel_scan over
-// std::vector arrays.
+// std::vector arrays whose large blocks take huge pages and are reused while the backend lives
+// (base/host_blocks.h).
 #pragma once
 
 #include <atomic>
@@ -11,11 +12,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_scan.h>
 
+#include "gwnrt/base/host_blocks.h"
+
 namespace gwnrt {
 
 struct HostBackend {
   template <class T>
-  using Array = std::vector<T>;
+  using Array = std::vector<T, HostBlockAllocator<T>>;
 
   // fn(i) for i in [0, n), in chunks of at least `grain` items; `progress` counts finished items.
   template <class Fn>
@@ -47,8 +50,15 @@ struct HostBackend {
   }
   template <class T>
   void move_out(Array<T>& a, std::vector<T>& dst) const {
-    dst = std::move(a);
+    dst.clear();
+    dst.reserve(a.size());
+    advise_huge_pages(dst.data(), a.size() * sizeof(T));
+    dst.assign(a.begin(), a.end());
+    a = Array<T>{};
   }
+
+ private:
+  HostBlockScope blocks_;
 };
 
 }  // namespace gwnrt
