@@ -1183,7 +1183,7 @@ struct CellVertexPass {
   uint64_t* vertex_cell;  // the cell item of each vertex (for the smoothing)
 
   GWNRT_HD void operator()(uint64_t item) const {
-    const uint32_t count = view.cell_vertex_count[item];
+    const uint32_t count = view.cell_vertex_count(item);
     if (count == 0) return;
     const GridCoord cell = view.coord_of_item(item);
     const uint32_t parts = view.cell_parts[item];
@@ -1467,7 +1467,7 @@ struct SmoothNormalsPass {
       nb[k >> 1] += (k & 1) ? 1 : -1;
       const uint64_t item = view.item_of(nb, 0);
       if (item == ~uint64_t(0)) continue;
-      const uint32_t first = view.cell_vertex_offset[item], count = view.cell_vertex_count[item];
+      const uint32_t first = view.cell_vertex_offset[item], count = view.cell_vertex_count(item);
       for (uint32_t j = first; j < first + count; ++j)
         if (glm::dot(normals_in[j], n0) >= cos_angle) sum += normals_in[j];
     }

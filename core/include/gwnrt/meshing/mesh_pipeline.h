@@ -163,8 +163,8 @@ struct SparseGridArrays {
   Array<float> corner_value;
   Array<BlockWinding> block_winding;  // per slot, with the exact method and a cone
   Array<uint8_t> edge_mask;
-  Array<uint32_t> edge_count, edge_offset;
-  Array<uint32_t> cell_parts, cell_count, cell_offset;
+  Array<uint32_t> edge_offset;
+  Array<uint32_t> cell_parts, cell_offset;
   SparseGridView view;
   uint64_t slots = 0;
 };
@@ -289,9 +289,10 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
-  // Per item: the corner value, edge mask, count and offset, the cell parts, count and offset.
+  // Per item: the corner value, edge mask and offset, the cell parts and offset, and the edges' or
+  // the cells' counts while they are scanned.
   const uint64_t per_slot =
-      uint64_t(kBlockItems) * (sizeof(float) + 1 + 5 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
+      uint64_t(kBlockItems) * (sizeof(float) + 1 + 4 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -364,10 +365,13 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
                   SparseGridArrays<Backend>& g, EdgeArrays<Backend>& e, MeshingStats& stats) {
   const uint64_t items = g.slots * kBlockItems;
   g.edge_mask.resize(items);
-  g.edge_count.resize(items);
   g.edge_offset.resize(items);
-  backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), g.edge_count.data()});
-  e.total = backend.exclusive_scan(g.edge_count.data(), g.edge_count.size(), g.edge_offset.data());
+  {  // the counts (the mask's bits) freed before the next arrays, which then take their memory
+    typename Backend::template Array<uint32_t> count;
+    count.resize(items);
+    backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), count.data()});
+    e.total = backend.exclusive_scan(count.data(), items, g.edge_offset.data());
+  }
   if (e.total >= kEmptyLane / 2)
     return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(e.total) + " crossing edges, beyond 2^31"};
   if (Status s = budget.reserve(e.total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
@@ -415,17 +419,19 @@ Status solve_cell_vertices(Backend& backend, MemoryBudget& budget, SparseGridArr
                            const EdgeArrays<Backend>& e, VertexArrays<Backend>& v, MeshingStats& stats) {
   const uint64_t items = g.slots * kBlockItems;
   g.cell_parts.resize(items);  // zeroed
-  g.cell_count.resize(items);
   g.cell_offset.resize(items);
   backend.parallel_for(e.total, CellMarkPass{g.view, e.edges.data(), g.cell_parts.data()});
-  typename Backend::template Array<unsigned long long> multi;
-  multi.resize(1);
-  backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), g.cell_count.data(), multi.data()});
-  stats.multi_component_cells = backend.to_host(multi, 0);
+  {  // the counts (cell_parts', SparseGridView::cell_vertex_count) freed before the vertices
+    typename Backend::template Array<uint32_t> count;
+    count.resize(items);
+    typename Backend::template Array<unsigned long long> multi;
+    multi.resize(1);
+    backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), count.data(), multi.data()});
+    stats.multi_component_cells = backend.to_host(multi, 0);
+    v.total = backend.exclusive_scan(count.data(), items, g.cell_offset.data());
+  }
   g.view.cell_parts = g.cell_parts.data();
-  v.total = backend.exclusive_scan(g.cell_count.data(), g.cell_count.size(), g.cell_offset.data());
   if (Status s = budget.reserve(v.total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
-  g.view.cell_vertex_count = g.cell_count.data();
   g.view.cell_vertex_offset = g.cell_offset.data();
   v.positions.resize(v.total);
   v.normals.resize(v.total);

@@ -72,7 +72,6 @@ struct SparseGridView {
   const uint8_t* edge_mask = nullptr;       // per corner: axes of its sign-changing edges
   const uint32_t* edge_offset = nullptr;    // per corner: index of its first edge
   const uint32_t* cell_parts = nullptr;     // per cell: pack_components of its pattern (0: no vertex)
-  const uint32_t* cell_vertex_count = nullptr;
   const uint32_t* cell_vertex_offset = nullptr;
 
   // The slot item (slot · kBlockItems + local) of a corner or cell, or kEmptyLane beyond the
@@ -83,6 +82,8 @@ struct SparseGridView {
     const uint32_t slot = slot_of_block[grid.block_index(c.x / kBlockCells, c.y / kBlockCells, c.z / kBlockCells)];
     return slot == kEmptyLane ? ~uint64_t(0) : uint64_t(slot) * kBlockItems + local_index(c);
   }
+  // A cell item's vertices: one per surface component of its pattern.
+  GWNRT_HD uint32_t cell_vertex_count(uint64_t item) const { return uint32_t(packed_count(cell_parts[item])); }
   GWNRT_HD float corner_value_at(const GridCoord& c) const {
     const uint64_t item = item_of(c, 1);
     return item == ~uint64_t(0) ? __builtin_nanf("") : corner_value[item];
