@@ -54,6 +54,7 @@ struct Row {
   Outcome outcome = Outcome::kOk;
   std::string message;  // why n/a, or the error
   double seconds = NAN;
+  std::vector<double> round_seconds;                      // each round's, when they were timed (add_rounds)
   double level_set_seconds = NAN, to_mesh_seconds = NAN;  // OpenVDB's two steps
   uint64_t quads = 0, openvdb_triangles = 0;              // OpenVDB's output before the split
   uint64_t quads_split_other_way = 0;                     // along (1, 3): see run_openvdb
@@ -82,7 +83,14 @@ struct MeshSummary {
 struct Settings {
   uint32_t samples = 50000;
   bool self_intersections = true;
+  uint32_t rounds = 1;  // timings per method, interleaved; the rows hold their medians
 };
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? NAN : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+}
 
 // Sum of the signed tetrahedra from the origin: the volume a closed mesh encloses, negative when
 // its triangles are clockwise seen from outside (how OpenVDB's winding is checked below).
@@ -111,19 +119,31 @@ Status measure(const GwnModel& model, const SurfaceMesh& mesh, const Settings& s
   return surface_distances(model, mesh, options, row.distances);
 }
 
-Row run_gwnrt(const GwnModel& model, MeshingMethod method, uint32_t resolution, const Settings& settings) {
-  Row row;
-  row.method = method == MeshingMethod::kDualContouring ? "gwnrt DC" : "gwnrt MC";
-  row.resolution = resolution;
+MeshingOptions gwnrt_options(MeshingMethod method, uint32_t resolution) {
   MeshingOptions options;
   options.resolution = resolution;
   options.method = method;
   // Refused with what it would need, rather than killed, beyond the memory available.
   options.memory_budget = std::min(options.memory_budget, available_memory_bytes());
+  return options;
+}
+
+// The seconds of one more meshing (a round after the first), or NaN where it fails.
+double gwnrt_seconds(const GwnModel& model, MeshingMethod method, uint32_t resolution) {
+  SurfaceMesh out;
+  const auto t0 = clock_type::now();
+  const Status s = extract_surface(model, gwnrt_options(method, resolution), out, nullptr);
+  return s.ok() ? seconds_since(t0) : NAN;
+}
+
+Row run_gwnrt(const GwnModel& model, MeshingMethod method, uint32_t resolution, const Settings& settings) {
+  Row row;
+  row.method = method == MeshingMethod::kDualContouring ? "gwnrt DC" : "gwnrt MC";
+  row.resolution = resolution;
   SurfaceMesh out;
   MeshingStats stats;
   const auto t0 = clock_type::now();
-  const Status s = extract_surface(model, options, out, &stats);
+  const Status s = extract_surface(model, gwnrt_options(method, resolution), out, &stats);
   row.seconds = seconds_since(t0);
   if (!s.ok()) {
     // A method the library does not have (yet): a gap in the table, not a failure.
@@ -146,6 +166,49 @@ Row run_gwnrt(const GwnModel& model, MeshingMethod method, uint32_t resolution, 
 // out negative as they are), the opposite of SurfaceMesh's convention: each is reversed.
 constexpr bool kReverseOpenVdbWinding = true;
 
+// The input in OpenVDB's types, made outside the timing (as the gwnrt model's build is).
+struct OpenVdbInput {
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  explicit OpenVdbInput(const GwnModel& model) {
+    const Mesh& input = model.mesh();
+    points.resize(input.positions.size());
+    triangles.resize(input.triangles.size());
+    for (size_t i = 0; i < points.size(); ++i)
+      points[i] = openvdb::Vec3s(input.positions[i].x, input.positions[i].y, input.positions[i].z);
+    for (size_t i = 0; i < triangles.size(); ++i)
+      triangles[i] = openvdb::Vec3I(input.triangles[i].x, input.triangles[i].y, input.triangles[i].z);
+  }
+};
+
+// OpenVDB's mesh -> level set -> mesh, timed in its two steps; throws what OpenVDB throws.
+void openvdb_mesh(const OpenVdbInput& input, double cell_size, std::vector<openvdb::Vec3s>& points,
+                  std::vector<openvdb::Vec3I>& triangles, std::vector<openvdb::Vec4I>& quads, double& level_set_seconds,
+                  double& to_mesh_seconds) {
+  const auto transform = openvdb::math::Transform::createLinearTransform(cell_size);
+  const auto t0 = clock_type::now();
+  const openvdb::FloatGrid::Ptr grid =
+      openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, input.points, input.triangles, 3.0f);
+  level_set_seconds = seconds_since(t0);
+  const auto t1 = clock_type::now();
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, 0.0);
+  to_mesh_seconds = seconds_since(t1);
+}
+
+// One more round of OpenVDB (a round after the first): its two steps' seconds, NaN where it fails.
+void openvdb_seconds(const GwnModel& model, double cell_size, double& level_set_seconds, double& to_mesh_seconds) {
+  level_set_seconds = to_mesh_seconds = NAN;
+  try {
+    const OpenVdbInput input(model);
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb_mesh(input, cell_size, points, triangles, quads, level_set_seconds, to_mesh_seconds);
+  } catch (...) {
+    level_set_seconds = to_mesh_seconds = NAN;
+  }
+}
+
 Row run_openvdb(const GwnModel& model, uint32_t resolution, double cell_size, const Settings& settings) {
   Row row;
   row.method = "OpenVDB";
@@ -156,28 +219,13 @@ Row run_openvdb(const GwnModel& model, uint32_t resolution, double cell_size, co
     row.message = "no cell size to match (gwnrt failed at this resolution)";
     return row;
   }
-  // The input in OpenVDB's types, outside the timing (as the gwnrt model's build is).
-  const Mesh& input = model.mesh();
-  std::vector<openvdb::Vec3s> in_points(input.positions.size());
-  std::vector<openvdb::Vec3I> in_triangles(input.triangles.size());
-  for (size_t i = 0; i < in_points.size(); ++i)
-    in_points[i] = openvdb::Vec3s(input.positions[i].x, input.positions[i].y, input.positions[i].z);
-  for (size_t i = 0; i < in_triangles.size(); ++i)
-    in_triangles[i] = openvdb::Vec3I(input.triangles[i].x, input.triangles[i].y, input.triangles[i].z);
-
   SurfaceMesh out;
   try {
-    const auto transform = openvdb::math::Transform::createLinearTransform(cell_size);
-    const auto t0 = clock_type::now();
-    const openvdb::FloatGrid::Ptr grid =
-        openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, in_points, in_triangles, 3.0f);
-    row.level_set_seconds = seconds_since(t0);
+    const OpenVdbInput input(model);
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
-    const auto t1 = clock_type::now();
-    openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, 0.0);
-    row.to_mesh_seconds = seconds_since(t1);
+    openvdb_mesh(input, cell_size, points, triangles, quads, row.level_set_seconds, row.to_mesh_seconds);
     row.seconds = row.level_set_seconds + row.to_mesh_seconds;
     row.quads = quads.size();
     row.openvdb_triangles = triangles.size();
@@ -226,6 +274,43 @@ const Row* find_row(const std::vector<Row>& rows, const std::string& method, uin
   for (const Row& r : rows)
     if (r.method == method && r.resolution == resolution && r.ok()) return &r;
   return nullptr;
+}
+
+// Rounds 2 to `rounds` of the rows of this resolution that succeeded, interleaved (DC, MC,
+// OpenVDB, DC, ...), so that the machine's load falls on each alike; each row's seconds become
+// the median of its rounds (a failed round is left out).
+void add_rounds(const GwnModel& model, uint32_t resolution, uint32_t rounds, std::vector<Row>& rows) {
+  struct Timed {
+    Row* row;
+    std::vector<double> seconds, level_set, to_mesh;
+  };
+  std::vector<Timed> timed;
+  for (Row& r : rows)
+    if (r.resolution == resolution && r.ok())
+      timed.push_back({&r, {r.seconds}, {r.level_set_seconds}, {r.to_mesh_seconds}});
+  for (uint32_t round = 1; round < rounds; ++round)
+    for (Timed& t : timed) {
+      if (t.row->method == "OpenVDB") {
+#if defined(GWNRT_HAVE_OPENVDB)
+        double level_set = NAN, to_mesh = NAN;
+        openvdb_seconds(model, t.row->cell_size, level_set, to_mesh);
+        if (std::isnan(level_set)) continue;
+        t.level_set.push_back(level_set);
+        t.to_mesh.push_back(to_mesh);
+        t.seconds.push_back(level_set + to_mesh);
+#endif
+      } else {
+        const MeshingMethod method =
+            t.row->method == "gwnrt DC" ? MeshingMethod::kDualContouring : MeshingMethod::kMarchingCubes;
+        if (const double s = gwnrt_seconds(model, method, resolution); !std::isnan(s)) t.seconds.push_back(s);
+      }
+    }
+  for (Timed& t : timed) {
+    t.row->round_seconds = t.seconds;
+    t.row->seconds = median(t.seconds);
+    t.row->level_set_seconds = median(t.level_set);
+    t.row->to_mesh_seconds = median(t.to_mesh);
+  }
 }
 
 std::string count_text(uint64_t n) { return std::to_string(n); }
@@ -315,6 +400,7 @@ nlohmann::json row_json(const std::string& mesh, const Row& r) {
                  : r.outcome == Outcome::kUnavailable ? "unavailable"
                                                       : "error"},
       {"seconds", number_or_null(r.seconds)},
+      {"round_seconds", r.round_seconds},
       {"triangles", ok ? nlohmann::json(r.triangles) : nlohmann::json()},
       {"closed_manifold", ok ? nlohmann::json(r.topology.closed_manifold()) : nlohmann::json()},
       {"boundary_edges", ok ? nlohmann::json(r.topology.boundary_edges) : nlohmann::json()},
@@ -367,6 +453,11 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(1u, 1u << 30))
       ->capture_default_str();
   app.add_flag("--no-self-intersections", no_self, "skip the self-intersection count (slow on big outputs)");
+  app.add_option("--rounds", settings.rounds,
+                 "time each method this many times, interleaved, and report the medians (the quality columns are "
+                 "the first round's)")
+      ->check(CLI::Range(1u, 100u))
+      ->capture_default_str();
   bool real = false;
   app.add_flag("--real", real,
                "after the meshes, the real ones: data/realworld, and ../shared/meshes/realworld's larger ones when "
@@ -410,8 +501,10 @@ int main(int argc, char** argv) try {
 
   const apps::ThreadLimit limit(threads);
   const int workers = int(limit.workers());
-  std::printf("%s: %d threads, %u distance samples, self-intersections %s\n", kProgram, workers, settings.samples,
-              settings.self_intersections ? "counted" : "not counted");
+  std::printf("%s: %d threads, %u distance samples, self-intersections %s, seconds: %s\n", kProgram, workers,
+              settings.samples, settings.self_intersections ? "counted" : "not counted",
+              settings.rounds > 1 ? ("medians of " + std::to_string(settings.rounds) + " interleaved rounds").c_str()
+                                  : "one round");
 #if defined(GWNRT_HAVE_OPENVDB)
   openvdb::initialize();
   std::printf(
@@ -460,6 +553,7 @@ int main(int argc, char** argv) try {
       const double cell = dc.ok() ? dc.cell_size : mc.ok() ? mc.cell_size : NAN;
       m.rows.push_back(run_openvdb(model, resolution, cell, settings));
 #endif
+      add_rounds(model, resolution, settings.rounds, m.rows);
     }
     for (Row& r : m.rows) {
       if (r.outcome == Outcome::kError) failed = true;
@@ -479,6 +573,7 @@ int main(int argc, char** argv) try {
   if (!json_path.empty()) {
     nlohmann::json out;
     out["threads"] = workers;
+    out["rounds"] = settings.rounds;
     out["samples"] = settings.samples;
     out["self_intersections_counted"] = settings.self_intersections;
     out["resolutions"] = resolutions;
