@@ -86,7 +86,8 @@ struct CudaBackend {
     }
   }
 
-  // out[i] = Σ in[0..i) (32-bit, as on the host), returning the 64-bit total.
+  // out[i] = Σ in[0..i) (32-bit, as on the host), returning the 64-bit total; out may be in (CUB
+  // scans in place), so the total is summed first.
   uint64_t exclusive_scan(const uint32_t* in, uint64_t n, uint32_t* out) const {
     if (n == 0) return 0;
     if (!scan_total.get())
@@ -98,9 +99,9 @@ struct CudaBackend {
     if (scan_temp.size() < needed)
       if (Status s = scan_temp.allocate(needed); !s.ok()) throw DeviceFailure(s);
     size_t bytes = scan_temp.size();
-    check_device(cub::DeviceScan::ExclusiveSum(scan_temp.get(), bytes, in, out, int64_t(n), stream), "cub scan");
-    bytes = scan_temp.size();
     check_device(cub::DeviceReduce::Sum(scan_temp.get(), bytes, in, scan_total.get(), int64_t(n), stream), "cub sum");
+    bytes = scan_temp.size();
+    check_device(cub::DeviceScan::ExclusiveSum(scan_temp.get(), bytes, in, out, int64_t(n), stream), "cub scan");
     uint64_t total = 0;
     check_device(cudaMemcpyAsync(&total, scan_total.get(), sizeof(total), cudaMemcpyDeviceToHost, stream),
                  "cudaMemcpy to host");

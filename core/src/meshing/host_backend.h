@@ -30,14 +30,16 @@ struct HostBackend {
     });
   }
 
-  // out[i] = Σ in[0..i), returning the total (which may exceed 32 bits: the caller checks).
+  // out[i] = Σ in[0..i), returning the total (which may exceed 32 bits: the caller checks); out
+  // may be in (each item is read before it is written, and a range is written once).
   uint64_t exclusive_scan(const uint32_t* in, uint64_t n, uint32_t* out) const {
     return tbb::parallel_scan(
         tbb::blocked_range<uint64_t>(0, n, 1 << 14), uint64_t(0),
         [&](const tbb::blocked_range<uint64_t>& r, uint64_t sum, bool final) {
           for (uint64_t i = r.begin(); i != r.end(); ++i) {
+            const uint32_t item = in[i];
             if (final) out[i] = uint32_t(sum);
-            sum += in[i];
+            sum += item;
           }
           return sum;
         },

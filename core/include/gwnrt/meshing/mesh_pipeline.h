@@ -2,7 +2,8 @@
 // host_backend.h; CUDA/CUB: cuda/src/mesh_backend.cuh): it sizes the arrays, runs the passes of
 // meshing/dual_contouring.h over their items and compacts with exclusive scans. A backend
 // provides Array<T> (resize, which need not keep the contents but zero-fills, data, size, move),
-// parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total, to_host(array, i)
+// parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total (out may be in),
+// to_host(array, i)
 // for the few values the driver reads back, and move_out(array, std::vector&) for the output.
 // Every function the driver hands to parallel_for is a GWNRT_HD functor or a GWNRT_PASS lambda
 // (base/hd.h); it never touches host memory from inside one (the output is moved out whole).
@@ -289,10 +290,9 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
-  // Per item: the corner value, edge mask and offset, the cell parts and offset, and the edges' or
-  // the cells' counts while they are scanned.
+  // Per item: the corner value, edge mask and offset, the cell parts and offset.
   const uint64_t per_slot =
-      uint64_t(kBlockItems) * (sizeof(float) + 1 + 4 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
+      uint64_t(kBlockItems) * (sizeof(float) + 1 + 3 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -366,12 +366,9 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   const uint64_t items = g.slots * kBlockItems;
   g.edge_mask.resize(items);
   g.edge_offset.resize(items);
-  {  // the counts (the mask's bits) freed before the next arrays, which then take their memory
-    typename Backend::template Array<uint32_t> count;
-    count.resize(items);
-    backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), count.data()});
-    e.total = backend.exclusive_scan(count.data(), items, g.edge_offset.data());
-  }
+  // The counts (the mask's bits) scanned in place into the offsets.
+  backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), g.edge_offset.data()});
+  e.total = backend.exclusive_scan(g.edge_offset.data(), items, g.edge_offset.data());
   if (e.total >= kEmptyLane / 2)
     return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(e.total) + " crossing edges, beyond 2^31"};
   if (Status s = budget.reserve(e.total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
@@ -421,15 +418,12 @@ Status solve_cell_vertices(Backend& backend, MemoryBudget& budget, SparseGridArr
   g.cell_parts.resize(items);  // zeroed
   g.cell_offset.resize(items);
   backend.parallel_for(e.total, CellMarkPass{g.view, e.edges.data(), g.cell_parts.data()});
-  {  // the counts (cell_parts', SparseGridView::cell_vertex_count) freed before the vertices
-    typename Backend::template Array<uint32_t> count;
-    count.resize(items);
-    typename Backend::template Array<unsigned long long> multi;
-    multi.resize(1);
-    backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), count.data(), multi.data()});
-    stats.multi_component_cells = backend.to_host(multi, 0);
-    v.total = backend.exclusive_scan(count.data(), items, g.cell_offset.data());
-  }
+  typename Backend::template Array<unsigned long long> multi;
+  multi.resize(1);
+  // The counts (cell_parts', SparseGridView::cell_vertex_count) scanned in place into the offsets.
+  backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), g.cell_offset.data(), multi.data()});
+  stats.multi_component_cells = backend.to_host(multi, 0);
+  v.total = backend.exclusive_scan(g.cell_offset.data(), items, g.cell_offset.data());
   g.view.cell_parts = g.cell_parts.data();
   if (Status s = budget.reserve(v.total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
   g.view.cell_vertex_offset = g.cell_offset.data();
