@@ -1343,6 +1343,11 @@ inline constexpr int kRepairRounds = 6;
 // Rounds before this one move a vertex half way to its safe point; from it on, onto it.
 inline constexpr int kRepairSnapRound = 2;
 
+// The repair's dirty cells: a bit per item, 32 to a word (dirty_words of them).
+GWNRT_HD constexpr uint64_t dirty_words(uint64_t items) { return (items + 31) / 32; }
+GWNRT_HD inline bool is_dirty(const uint32_t* dirty, uint64_t item) { return (dirty[item / 32] >> (item % 32)) & 1u; }
+GWNRT_HD inline void mark_dirty(uint32_t* dirty, uint64_t item) { atomic_or(dirty + item / 32, 1u << (item % 32)); }
+
 // Per cell with vertices (run over the vertices: the cell's first vertex does it) whose `dirty`
 // flag is set (every such cell when dirty is null): the pairs of triangles of its edges' quads
 // tested in it that meet; their vertices get `flag` 1, the count goes to pairs[0].
@@ -1357,7 +1362,7 @@ struct SelfIntersectionPass {
 
   GWNRT_HD void operator()(uint64_t vertex) const {
     const uint64_t item = vertex_cell[vertex];
-    if (vertex != view.cell_vertex_offset[item] || (dirty && !dirty[item])) return;
+    if (vertex != view.cell_vertex_offset[item] || (dirty && !is_dirty(dirty, item))) return;
     const GridCoord cell = view.coord_of_item(item);
     constexpr int kMax = 2 * kCellEdges;
     uint32_t id[kMax];
@@ -1444,7 +1449,7 @@ struct VertexRepairPass {
     atomic_add(moves, 1ull);
     for (int d = 0; d < 27; ++d) {
       const uint64_t near = view.item_of({cell.x + d % 3 - 1, cell.y + (d / 3) % 3 - 1, cell.z + d / 9 - 1}, 0);
-      if (near != ~uint64_t(0)) atomic_or(dirty + near, 1u);
+      if (near != ~uint64_t(0)) mark_dirty(dirty, near);
     }
   }
 };

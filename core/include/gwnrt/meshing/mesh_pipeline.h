@@ -453,7 +453,8 @@ Status repair_self_intersections(Backend& backend, const MeshingOptions& options
                                  const typename Backend::template Array<uvec3>& triangles, MeshingStats& stats) {
   if (!options.repair_self_intersections) return Status::Ok();
   const uint64_t items = g.slots * kBlockItems;
-  if (Status s = budget.reserve((v.total + items) * sizeof(uint32_t), "the repair's flags"); !s.ok()) return s;
+  const uint64_t flag_bytes = (v.total + dirty_words(items)) * sizeof(uint32_t);
+  if (Status s = budget.reserve(flag_bytes, "the repair's flags"); !s.ok()) return s;
   typename Backend::template Array<uint32_t> flag, dirty;
   flag.resize(v.total);                                        // zeroed
   typename Backend::template Array<unsigned long long> moves;  // VertexRepairPass's count, zeroed
@@ -470,14 +471,14 @@ Status repair_self_intersections(Backend& backend, const MeshingOptions& options
     stats.self_intersections_left = found;
     if (found == 0 || round == kRepairRounds) break;
     typename Backend::template Array<uint32_t> fresh;
-    fresh.resize(items);  // zeroed
+    fresh.resize(dirty_words(items));  // zeroed
     dirty = std::move(fresh);
     backend.parallel_for(v.total, VertexRepairPass{g.view, v.cell.data(), v.positions.data(), flag.data(), dirty.data(),
                                                    round >= kRepairSnapRound, moves.data()});
     stats.repair_rounds = uint32_t(round + 1);
   }
   stats.repaired_vertex_moves = backend.to_host(moves, 0);
-  budget.release((v.total + items) * sizeof(uint32_t));
+  budget.release(flag_bytes);
   return Status::Ok();
 }
 
