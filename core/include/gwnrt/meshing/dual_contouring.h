@@ -735,10 +735,9 @@ GWNRT_HD inline bool is_inside(float f) { return f > 0.0f; }
 // ---------------------------------------------------------------------------------------------
 // Edges: each corner owns the three edges toward +x, +y, +z.
 
-struct EdgeCountPass {
+struct EdgeMaskPass {
   SparseGridView view;
   uint8_t* edge_mask;
-  uint32_t* edge_count;
 
   GWNRT_HD void operator()(uint64_t item) const {
     const float f = view.corner_value[item];
@@ -751,16 +750,42 @@ struct EdgeCountPass {
       }
     }
     edge_mask[item] = uint8_t(mask);
-    edge_count[item] = uint32_t(bit_count(mask));
   }
 };
+
+// Per slot: the running sum over its items of count(item) (its edges, its vertices) as offsets
+// within the slot (in_slot), and the slot's total (slot_total, which an exclusive scan over the
+// slots turns into their first indices).
+template <class Count>
+struct SlotOffsetsPass {
+  Count count;
+  uint16_t* in_slot;
+  uint32_t* slot_total;
+  GWNRT_HD void operator()(uint64_t slot) const {
+    uint32_t sum = 0;
+    for (uint64_t item = slot * kBlockItems; item < (slot + 1) * kBlockItems; ++item) {
+      in_slot[item] = uint16_t(sum);
+      sum += count(item);
+    }
+    slot_total[slot] = sum;
+  }
+};
+struct EdgesOfCorner {
+  const uint8_t* edge_mask;
+  GWNRT_HD uint32_t operator()(uint64_t item) const { return uint32_t(bit_count(edge_mask[item])); }
+};
+struct VerticesOfCell {
+  const uint32_t* cell_parts;
+  GWNRT_HD uint32_t operator()(uint64_t item) const { return uint32_t(packed_count(cell_parts[item])); }
+};
+static_assert(3 * kBlockItems <= 65535 && 4 * kBlockItems <= 65535, "a slot's offsets fit 16 bits");
 
 // The edges listed: edge i = (corner item) · 4 + axis.
 struct EdgeListPass {
   SparseGridView view;
   uint64_t* edges;
   GWNRT_HD void operator()(uint64_t item) const {
-    uint32_t k = view.edge_offset[item];
+    uint32_t k = view.edge_offset(item);
     for (uint32_t mask = view.edge_mask[item]; mask != 0; mask &= mask - 1)
       edges[k++] = item * 4 + uint32_t(lowest_set_bit(mask));
   }
@@ -1077,7 +1102,7 @@ GWNRT_HD inline uint32_t edge_index(const SparseGridView& view, const GridCoord&
   if (item == ~uint64_t(0)) return kEmptyLane;
   const uint32_t mask = view.edge_mask[item];
   if (!((mask >> axis) & 1u)) return kEmptyLane;
-  return view.edge_offset[item] + uint32_t(bit_count(mask & ((1u << axis) - 1u)));
+  return view.edge_offset(item) + uint32_t(bit_count(mask & ((1u << axis) - 1u)));
 }
 
 // The index of edge e (cell_topology.h's numbering) of `cell`, or kEmptyLane.
@@ -1142,10 +1167,9 @@ struct CellMarkPass {
 };
 
 // Vertices per marked cell of an active slot: one per surface component.
-struct CellCountPass {
+struct CellPartsPass {
   SparseGridView view;
   uint32_t* cell_parts;
-  uint32_t* cell_vertex_count;
   unsigned long long* multi_component_cells;
   GWNRT_HD void operator()(uint64_t item) const {
     uint32_t parts = 0;
@@ -1157,7 +1181,6 @@ struct CellCountPass {
         parts = packed_cell_components(uint32_t(mask), flipped_faces(view, cell, uint32_t(mask)));
     }
     cell_parts[item] = parts;
-    cell_vertex_count[item] = uint32_t(packed_count(parts));
     if (packed_count(parts) > 1) atomic_add(multi_component_cells, 1);
   }
 };
@@ -1202,7 +1225,7 @@ struct CellVertexPass {
       box_lo[c] = glm::min(box_lo[c], q);
       box_hi[c] = glm::max(box_hi[c], q);
     }
-    const uint32_t first = view.cell_vertex_offset[item];
+    const uint32_t first = view.cell_vertex_offset(item);
     for (uint32_t p = 0; p < count; ++p) {
       // Kept in the cell itself. A sharp edge passing just outside a cell whose grid edges both
       // its faces cross has its QEF minimum outside the cell, and the clamped vertex lies off the
@@ -1229,7 +1252,7 @@ GWNRT_HD inline uint32_t edge_vertex(const SparseGridView& view, const GridCoord
   const uint32_t parts = view.cell_parts[item];
   if (parts == 0) return kEmptyLane;
   const int corner = (c.x - cell.x) | ((c.y - cell.y) << 1) | ((c.z - cell.z) << 2);
-  return view.cell_vertex_offset[item] + uint32_t(packed_component(parts, corner_edge(corner, axis)));
+  return view.cell_vertex_offset(item) + uint32_t(packed_component(parts, corner_edge(corner, axis)));
 }
 
 // One quad per sign-changing edge, from the four cells around it, ordered so that its normal
@@ -1362,7 +1385,7 @@ struct SelfIntersectionPass {
 
   GWNRT_HD void operator()(uint64_t vertex) const {
     const uint64_t item = vertex_cell[vertex];
-    if (vertex != view.cell_vertex_offset[item] || (dirty && !is_dirty(dirty, item))) return;
+    if (vertex != view.cell_vertex_offset(item) || (dirty && !is_dirty(dirty, item))) return;
     const GridCoord cell = view.coord_of_item(item);
     constexpr int kMax = 2 * kCellEdges;
     uint32_t id[kMax];
@@ -1441,7 +1464,7 @@ struct VertexRepairPass {
     flag[v] = 0;
     const uint64_t item = vertex_cell[v];
     const GridCoord cell = view.coord_of_item(item);
-    const int component = int(v - view.cell_vertex_offset[item]);
+    const int component = int(v - view.cell_vertex_offset(item));
     const vec3 safe = component_safe_point(view, cell, view.cell_parts[item], component);
     const vec3 p = snap ? safe : strictly_inside_cell(view.grid, cell, 0.5f * (positions[v] + safe));
     if (p == positions[v]) return;
@@ -1472,7 +1495,7 @@ struct SmoothNormalsPass {
       nb[k >> 1] += (k & 1) ? 1 : -1;
       const uint64_t item = view.item_of(nb, 0);
       if (item == ~uint64_t(0)) continue;
-      const uint32_t first = view.cell_vertex_offset[item], count = view.cell_vertex_count(item);
+      const uint32_t first = view.cell_vertex_offset(item), count = view.cell_vertex_count(item);
       for (uint32_t j = first; j < first + count; ++j)
         if (glm::dot(normals_in[j], n0) >= cos_angle) sum += normals_in[j];
     }

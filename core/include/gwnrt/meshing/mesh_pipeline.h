@@ -164,8 +164,9 @@ struct SparseGridArrays {
   Array<float> corner_value;
   Array<BlockWinding> block_winding;  // per slot, with the exact method and a cone
   Array<uint8_t> edge_mask;
-  Array<uint32_t> edge_offset;
-  Array<uint32_t> cell_parts, cell_offset;
+  Array<uint16_t> edge_in_slot, vertex_in_slot;
+  Array<uint32_t> slot_first_edge, slot_first_vertex;
+  Array<uint32_t> cell_parts;
   SparseGridView view;
   uint64_t slots = 0;
 };
@@ -290,9 +291,10 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
-  // Per item: the corner value, edge mask and offset, the cell parts and offset.
+  // Per item: the corner value, edge mask, cell parts, and the edges' and vertices' offsets in the
+  // slot; per slot: its first edge and vertex, the block map's words, the block winding.
   const uint64_t per_slot =
-      uint64_t(kBlockItems) * (sizeof(float) + 1 + 3 * sizeof(uint32_t)) + 8 + sizeof(BlockWinding);
+      uint64_t(kBlockItems) * (sizeof(float) + 1 + sizeof(uint32_t) + 2 * sizeof(uint16_t)) + 16 + sizeof(BlockWinding);
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -365,17 +367,20 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
                   SparseGridArrays<Backend>& g, EdgeArrays<Backend>& e, MeshingStats& stats) {
   const uint64_t items = g.slots * kBlockItems;
   g.edge_mask.resize(items);
-  g.edge_offset.resize(items);
-  // The counts (the mask's bits) scanned in place into the offsets.
-  backend.parallel_for(items, EdgeCountPass{g.view, g.edge_mask.data(), g.edge_offset.data()});
-  e.total = backend.exclusive_scan(g.edge_offset.data(), items, g.edge_offset.data());
+  g.edge_in_slot.resize(items);
+  g.slot_first_edge.resize(g.slots);
+  backend.parallel_for(items, EdgeMaskPass{g.view, g.edge_mask.data()});
+  backend.parallel_for(
+      g.slots, SlotOffsetsPass<EdgesOfCorner>{{g.edge_mask.data()}, g.edge_in_slot.data(), g.slot_first_edge.data()});
+  e.total = backend.exclusive_scan(g.slot_first_edge.data(), g.slots, g.slot_first_edge.data());
   if (e.total >= kEmptyLane / 2)
     return {StatusCode::kOutOfMemory, "meshing: " + std::to_string(e.total) + " crossing edges, beyond 2^31"};
   if (Status s = budget.reserve(e.total * (sizeof(uint64_t) + sizeof(HermitePoint) + 2 * sizeof(uvec3)), "the edges");
       !s.ok())
     return s;
   g.view.edge_mask = g.edge_mask.data();
-  g.view.edge_offset = g.edge_offset.data();
+  g.view.edge_in_slot = g.edge_in_slot.data();
+  g.view.slot_first_edge = g.slot_first_edge.data();
   e.edges.resize(e.total);
   backend.parallel_for(items, EdgeListPass{g.view, e.edges.data()});
   e.hermite.resize(e.total);
@@ -416,17 +421,20 @@ Status solve_cell_vertices(Backend& backend, MemoryBudget& budget, SparseGridArr
                            const EdgeArrays<Backend>& e, VertexArrays<Backend>& v, MeshingStats& stats) {
   const uint64_t items = g.slots * kBlockItems;
   g.cell_parts.resize(items);  // zeroed
-  g.cell_offset.resize(items);
+  g.vertex_in_slot.resize(items);
+  g.slot_first_vertex.resize(g.slots);
   backend.parallel_for(e.total, CellMarkPass{g.view, e.edges.data(), g.cell_parts.data()});
   typename Backend::template Array<unsigned long long> multi;
   multi.resize(1);
-  // The counts (cell_parts', SparseGridView::cell_vertex_count) scanned in place into the offsets.
-  backend.parallel_for(items, CellCountPass{g.view, g.cell_parts.data(), g.cell_offset.data(), multi.data()});
+  backend.parallel_for(items, CellPartsPass{g.view, g.cell_parts.data(), multi.data()});
   stats.multi_component_cells = backend.to_host(multi, 0);
-  v.total = backend.exclusive_scan(g.cell_offset.data(), items, g.cell_offset.data());
+  backend.parallel_for(g.slots, SlotOffsetsPass<VerticesOfCell>{
+                                    {g.cell_parts.data()}, g.vertex_in_slot.data(), g.slot_first_vertex.data()});
+  v.total = backend.exclusive_scan(g.slot_first_vertex.data(), g.slots, g.slot_first_vertex.data());
   g.view.cell_parts = g.cell_parts.data();
   if (Status s = budget.reserve(v.total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
-  g.view.cell_vertex_offset = g.cell_offset.data();
+  g.view.vertex_in_slot = g.vertex_in_slot.data();
+  g.view.slot_first_vertex = g.slot_first_vertex.data();
   v.positions.resize(v.total);
   v.normals.resize(v.total);
   v.cell.resize(v.total);

@@ -70,9 +70,13 @@ struct SparseGridView {
   const uint32_t* needed_from = nullptr;    // per slot: bit d set when block − d (d ∈ {0,1}³) is active
   const float* corner_value = nullptr;      // per slot × kBlockItems: w − w*; NaN: not evaluated
   const uint8_t* edge_mask = nullptr;       // per corner: axes of its sign-changing edges
-  const uint32_t* edge_offset = nullptr;    // per corner: index of its first edge
-  const uint32_t* cell_parts = nullptr;     // per cell: pack_components of its pattern (0: no vertex)
-  const uint32_t* cell_vertex_offset = nullptr;
+  // A corner's first edge and a cell's first vertex: the slot's first plus the item's within the
+  // slot (16 bits: a slot has at most 3 edges and 4 vertices an item; SlotOffsetsPass).
+  const uint16_t* edge_in_slot = nullptr;
+  const uint32_t* slot_first_edge = nullptr;
+  const uint32_t* cell_parts = nullptr;  // per cell: pack_components of its pattern (0: no vertex)
+  const uint16_t* vertex_in_slot = nullptr;
+  const uint32_t* slot_first_vertex = nullptr;
 
   // The slot item (slot · kBlockItems + local) of a corner or cell, or kEmptyLane beyond the
   // grid or in a block without a slot.
@@ -81,6 +85,12 @@ struct SparseGridView {
       if (c[a] < 0 || c[a] >= grid.cells[a] + limit_extra) return ~uint64_t(0);
     const uint32_t slot = slot_of_block[grid.block_index(c.x / kBlockCells, c.y / kBlockCells, c.z / kBlockCells)];
     return slot == kEmptyLane ? ~uint64_t(0) : uint64_t(slot) * kBlockItems + local_index(c);
+  }
+  GWNRT_HD uint32_t edge_offset(uint64_t item) const {
+    return slot_first_edge[item / kBlockItems] + edge_in_slot[item];
+  }
+  GWNRT_HD uint32_t cell_vertex_offset(uint64_t item) const {
+    return slot_first_vertex[item / kBlockItems] + vertex_in_slot[item];
   }
   // A cell item's vertices: one per surface component of its pattern.
   GWNRT_HD uint32_t cell_vertex_count(uint64_t item) const { return uint32_t(packed_count(cell_parts[item])); }
