@@ -375,7 +375,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
       tri[i][k] = pos[v[k]];
       corner_id[i][k] = vertex_id[v[k]];
     }
-    plane[i] = exact::PlaneFilter(tri[i]);
+    plane[i].set(tri[i]);
   });
   // The boxes again by coordinate, padded by boxes that overlap nothing, for the lane test below.
   std::array<std::vector<float>, 6> box_column;

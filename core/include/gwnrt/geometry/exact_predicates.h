@@ -309,7 +309,11 @@ struct PlaneFilter {
   dvec3 normal, magnitude;  // magnitude: per component, the sum of |products| it was made of
 
   PlaneFilter() = default;
-  GWNRT_HD explicit PlaneFilter(const Triangle& t) : origin(t[0]) {
+  GWNRT_HD explicit PlaneFilter(const Triangle& t) { set(t); }
+  // In place: an array of them filled without a temporary's copy (whose wide load waits on the
+  // narrow stores just made).
+  GWNRT_HD void set(const Triangle& t) {
+    origin = t[0];
     const dvec3 u = dvec3(t[1]) - dvec3(t[0]), v = dvec3(t[2]) - dvec3(t[0]);
     normal = dvec3(u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x);
     magnitude =

@@ -1407,7 +1407,7 @@ struct SelfIntersectionPass {
         for (int j = 0; j < 3; ++j) tri[n][j] = positions[v[j]];
         box[n] = {glm::min(tri[n][0], glm::min(tri[n][1], tri[n][2])),
                   glm::max(tri[n][0], glm::max(tri[n][1], tri[n][2]))};
-        plane[n] = exact::PlaneFilter(tri[n]);
+        plane[n].set(tri[n]);
         // A zero-area triangle meets nothing by the pair test's rule.
         if (plane[n].certainly_nonzero_area() || !exact::collinear(tri[n][0], tri[n][1], tri[n][2])) ++n;
       }
