@@ -20,6 +20,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "base/message.h"
+#include "gwnrt/base/host_blocks.h"
 #include "gwnrt/field/distance.h"
 #include "gwnrt/geometry/bvh.h"
 #include "gwnrt/geometry/exact_predicates.h"
@@ -55,8 +56,8 @@ Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
 
 // Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get the id of their
 // group in lexicographic order. Returns the number of distinct positions.
-uint32_t weld_positions(const std::vector<vec3>& pos, std::vector<uint32_t>& id) {
-  std::vector<uint32_t> order(pos.size());
+uint32_t weld_positions(const std::vector<vec3>& pos, HostVector<uint32_t>& id) {
+  HostVector<uint32_t> order(pos.size());
   for (size_t i = 0; i < pos.size(); ++i) order[i] = uint32_t(i);
   auto less = [&](uint32_t a, uint32_t b) {
     const vec3 &p = pos[a], &q = pos[b];
@@ -88,10 +89,10 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   MeshTopology topo;
   const size_t n = mesh.triangles.size();
   topo.triangles = n;
-  std::vector<uvec3> tris(mesh.triangles);
+  HostVector<uvec3> tris(mesh.triangles.begin(), mesh.triangles.end());
   size_t vertex_count = mesh.positions.size();
   if (weld) {
-    std::vector<uint32_t> id;
+    HostVector<uint32_t> id;
     vertex_count = weld_positions(mesh.positions, id);
     tbb::parallel_for(size_t(0), n, [&](size_t t) {
       for (int k = 0; k < 3; ++k) tris[t][k] = id[tris[t][k]];
@@ -100,7 +101,7 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   topo.vertices = vertex_count;
 
   // Per triangle: 0 sound, 1 zero area (still in the edge counts), 2 repeated index (left out).
-  std::vector<uint8_t> kind(n);
+  HostVector<uint8_t> kind(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t) {
       const uvec3 v = tris[t];
@@ -112,8 +113,8 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
     }
   });
 
-  std::vector<uint8_t> used(vertex_count, 0);
-  std::vector<HalfEdge> edges(3 * n);
+  HostVector<uint8_t> used(vertex_count, 0);
+  HostVector<HalfEdge> edges(3 * n);
   size_t valid = 0;
   for (size_t t = 0; t < n; ++t) {
     if (kind[t] != 0) ++topo.degenerate_triangles;
@@ -168,7 +169,7 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   }
   // A fan is a set of corners at one vertex (unions only join corners of the same vertex): a
   // vertex with corners in two sets has two fans.
-  std::vector<uint8_t> fans(vertex_count, 0);
+  HostVector<uint8_t> fans(vertex_count, 0);
   for (size_t t = 0; t < n; ++t) {
     if (kind[t] == 2) continue;
     if (triangle_sets.find(uint32_t(t)) == t) ++topo.components;
@@ -211,7 +212,7 @@ inline fnear load_lanes(const float* p) {
   __builtin_memcpy(&v, p, sizeof v);
   return v;
 }
-inline uint32_t overlapping_boxes(const std::array<std::vector<float>, 6>& column, size_t j, const Aabb& b) {
+inline uint32_t overlapping_boxes(const std::array<HostVector<float>, 6>& column, size_t j, const Aabb& b) {
   inear in = inear{} - 1;
   for (int a = 0; a < 3; ++a)
     in &=
@@ -220,7 +221,7 @@ inline uint32_t overlapping_boxes(const std::array<std::vector<float>, 6>& colum
 }
 #else
 inline constexpr int kBoxLanes = 4;
-inline uint32_t overlapping_boxes(const std::array<std::vector<float>, 6>& column, size_t j, const Aabb& b) {
+inline uint32_t overlapping_boxes(const std::array<HostVector<float>, 6>& column, size_t j, const Aabb& b) {
   uint32_t mask = 0;
   for (int l = 0; l < kBoxLanes; ++l) {
     bool in = true;
@@ -250,15 +251,15 @@ inline constexpr int64_t kMaxRings = 8;
 
 // The mesh's triangles of non-zero area on the uniform grid above, in cell order.
 struct TriangleGrid {
-  std::vector<uint32_t> input;  // grid order -> mesh triangle
-  std::vector<Aabb> box;        // in grid order
-  size_t narrow = 0;            // [0, narrow) filed under their cells, [narrow, size) wider than a cell
+  HostVector<uint32_t> input;  // grid order -> mesh triangle
+  HostVector<Aabb> box;        // in grid order
+  size_t narrow = 0;           // [0, narrow) filed under their cells, [narrow, size) wider than a cell
   dvec3 origin{0.0};
   double cell = 1.0;
   uint64_t dims[3] = {1, 1, 1};
-  std::vector<uint64_t> run_key;    // the occupied cells, ascending
-  std::vector<uint32_t> run_begin;  // cell run_key[r] holds [run_begin[r], run_begin[r + 1])
-  std::vector<int32_t> dense_run;   // per cell its run or -1, where the cells are few enough
+  HostVector<uint64_t> run_key;    // the occupied cells, ascending
+  HostVector<uint32_t> run_begin;  // cell run_key[r] holds [run_begin[r], run_begin[r + 1])
+  HostVector<int32_t> dense_run;   // per cell its run or -1, where the cells are few enough
 
   uint64_t key(uint64_t x, uint64_t y, uint64_t z) const { return x + dims[0] * (y + dims[1] * z); }
   // The run of cell q (any coordinates), or -1 when it holds none; from: where to start looking.
@@ -275,14 +276,14 @@ struct TriangleGrid {
 void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   const size_t n_all = mesh.triangles.size();
   const std::vector<vec3>& pos = mesh.positions;
-  std::vector<uint8_t> keep(n_all);
+  HostVector<uint8_t> keep(n_all);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n_all, 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t) {
       const uvec3 v = mesh.triangles[t];
       keep[t] = !exact::collinear(pos[v[0]], pos[v[1]], pos[v[2]]);
     }
   });
-  std::vector<uint32_t> ids;
+  HostVector<uint32_t> ids;
   for (size_t t = 0; t < n_all; ++t)
     if (keep[t]) ids.push_back(uint32_t(t));
   const size_t n = ids.size();
@@ -292,8 +293,8 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
     return;
   }
   // Boxes and extents (in double: the classification below must not round a width down).
-  std::vector<Aabb> bounds(n);
-  std::vector<double> extent(n);
+  HostVector<Aabb> bounds(n);
+  HostVector<double> extent(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     for (int k = 0; k < 3; ++k) bounds[i].extend(pos[mesh.triangles[ids[i]][k]]);
     const dvec3 e = dvec3(bounds[i].hi) - dvec3(bounds[i].lo);
@@ -306,7 +307,7 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   }
   g.origin = dvec3(all.lo);
   const dvec3 size = dvec3(all.hi) - dvec3(all.lo);
-  std::vector<double> sorted_extent(extent);
+  HostVector<double> sorted_extent(extent);
   std::nth_element(sorted_extent.begin(), sorted_extent.begin() + ptrdiff_t(n / 2), sorted_extent.end());
   g.cell = kGridCellOverMedianExtent * sorted_extent[n / 2];
   g.cell = std::max(g.cell, std::max(size.x, std::max(size.y, size.z)) / kMaxGridCellsPerAxis);
@@ -319,7 +320,7 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   // narrower ones' low corners stay within one cell of each other's).
   const double narrow = g.cell * (1.0 - 1e-6);
   constexpr uint64_t kWide = ~uint64_t(0);
-  std::vector<std::pair<uint64_t, uint32_t>> order(n);
+  HostVector<std::pair<uint64_t, uint32_t>> order(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const vec3& lo = bounds[i].lo;
     order[i] = {extent[i] <= narrow ? g.key(cell_of(lo, 0), cell_of(lo, 1), cell_of(lo, 2)) : kWide, uint32_t(i)};
@@ -357,18 +358,18 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
   const size_t n = grid.input.size(), n_narrow = grid.narrow;
   if (n == 0) return Status::Ok();
   const std::vector<vec3>& pos = mesh.positions;
-  const std::vector<Aabb>& box = grid.box;
-  const std::vector<uint64_t>& run_key = grid.run_key;
-  const std::vector<uint32_t>& run_begin = grid.run_begin;
+  const HostVector<Aabb>& box = grid.box;
+  const HostVector<uint64_t>& run_key = grid.run_key;
+  const HostVector<uint32_t>& run_begin = grid.run_begin;
 
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
   // corners by their ids.
-  std::vector<uint32_t> vertex_id;
+  HostVector<uint32_t> vertex_id;
   weld_positions(pos, vertex_id);
   // Triangles in cell order, so that a cell's are adjacent in memory.
-  std::vector<exact::Triangle> tri(n);
-  std::vector<exact::PlaneFilter> plane(n);
-  std::vector<uvec3> corner_id(n);
+  HostVector<exact::Triangle> tri(n);
+  HostVector<exact::PlaneFilter> plane(n);
+  HostVector<uvec3> corner_id(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const uvec3 v = mesh.triangles[grid.input[i]];
     for (int k = 0; k < 3; ++k) {
@@ -378,7 +379,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
     plane[i].set(tri[i]);
   });
   // The boxes again by coordinate, padded by boxes that overlap nothing, for the lane test below.
-  std::array<std::vector<float>, 6> box_column;
+  std::array<HostVector<float>, 6> box_column;
   for (int c = 0; c < 6; ++c) box_column[c].assign(n + kBoxLanes, c < 3 ? kInfinity : -kInfinity);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     for (int a = 0; a < 3; ++a) {
@@ -426,7 +427,7 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
 
   // Wide against every other: each triangle against the wide ones after it.
   if (n_narrow < n) {
-    std::vector<Aabb> wide_bounds(box.begin() + ptrdiff_t(n_narrow), box.end());
+    HostVector<Aabb> wide_bounds(box.begin() + ptrdiff_t(n_narrow), box.end());
     WideBvh bvh;
     if (Status s = build_wide_bvh(wide_bounds, 4, bvh); !s.ok()) return s;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -471,7 +472,7 @@ inline double uniform01(std::mt19937_64& g) { return double(g() >> 11) * 0x1p-53
 // triangle by one search and a uniform point in it (sqrt of one uniform folds the square onto the
 // triangle without bias).
 struct AreaSampler {
-  std::vector<double> cumulative;
+  HostVector<double> cumulative;
   double total = 0;
   void add(const dvec3& p0, const dvec3& p1, const dvec3& p2) {
     total += 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0));
@@ -560,7 +561,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
 
   // Output -> S.
   const std::vector<vec3>& pos = mesh.positions;
-  std::vector<vec3> samples;
+  HostVector<vec3> samples;
   {
     AreaSampler area;
     for (const uvec3& v : mesh.triangles) area.add(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]));
@@ -572,9 +573,9 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
       }
     }
     if (options.vertex_samples > 0) {
-      std::vector<uint8_t> used(pos.size(), 0);
+      HostVector<uint8_t> used(pos.size(), 0);
       for (const uvec3& v : mesh.triangles) used[v[0]] = used[v[1]] = used[v[2]] = 1;
-      std::vector<uint32_t> vertices;
+      HostVector<uint32_t> vertices;
       for (size_t i = 0; i < pos.size(); ++i)
         if (used[i]) vertices.push_back(uint32_t(i));
       if (vertices.size() > options.vertex_samples) {
@@ -587,7 +588,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
     }
   }
   // |sdf| at each sample, its sign never read: without w where the sheet distance is the answer.
-  std::vector<float> to_surface(samples.size());
+  HostVector<float> to_surface(samples.size());
   {
     const WindingOptions winding{resolve_point_method(view, request.method), request.taylor};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
@@ -609,7 +610,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   const dvec3 centre(bounds.centre());
   const double half_diagonal = 0.5 * glm::length(dvec3(bounds.hi) - dvec3(bounds.lo));
   const double radius = 1.5 * std::max(half_diagonal, 1e-30);
-  std::vector<Ray> rays(options.surface_rays);
+  HostVector<Ray> rays(options.surface_rays);
   for (Ray& ray : rays) {
     const double z = 2 * uniform01(rng) - 1, phi = 2 * kPi * uniform01(rng), s = std::sqrt(std::max(0.0, 1 - z * z));
     const dvec3 origin = centre + radius * dvec3(s * std::cos(phi), s * std::sin(phi), z);
@@ -631,7 +632,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
       });
     }
   });
-  std::vector<SurfacePoint> surface_points;
+  HostVector<SurfacePoint> surface_points;
   for (const auto& v : ray_points) surface_points.insert(surface_points.end(), v.begin(), v.end());
   ray_points = {};
   // Points of S's sheets: M's sheet triangles for the level (the model's classification, which its
@@ -681,7 +682,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   const double tie = grid.input.empty() ? 0.0 : 1e-6 * glm::length(dvec3(output_box.hi) - dvec3(output_box.lo));
   TriangleTree wide_tree;
   if (grid.narrow < grid.input.size()) {
-    const std::vector<uint32_t> wide(grid.input.begin() + ptrdiff_t(grid.narrow), grid.input.end());
+    const HostVector<uint32_t> wide(grid.input.begin() + ptrdiff_t(grid.narrow), grid.input.end());
     fill_output();
     if (Status s = build_triangle_tree(output, wide, 4, wide_tree, TreeMoments::kWithout); !s.ok()) return s;
   }
@@ -709,16 +710,16 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
               });
     from = best;
   };
-  std::vector<double> from_surface(surface_points.size()), deviation(surface_points.size());
-  std::vector<uint8_t> far(surface_points.size(), 0);  // beyond the rings searched: by a tree
-  tbb::enumerable_thread_specific<std::vector<int64_t>> ring_runs;
+  HostVector<double> from_surface(surface_points.size()), deviation(surface_points.size());
+  HostVector<uint8_t> far(surface_points.size(), 0);  // beyond the rings searched: by a tree
+  tbb::enumerable_thread_specific<HostVector<int64_t>> ring_runs;
   // Out to kMaxRings rings where the grid has a dense map, else 2 (each cell a search).
   const int64_t max_ring = grid.dense_run.empty() ? 2 : kMaxRings;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const vec3 x = surface_points[k].position;
       const dvec3 xd(x);
-      std::vector<int64_t>& runs = ring_runs.local();
+      HostVector<int64_t>& runs = ring_runs.local();
       runs.clear();
       int64_t c[3];
       for (int a = 0; a < 3; ++a)
@@ -827,24 +828,9 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   return Status::Ok();
 }
 
-}  // namespace
-
-Status mesh_topology(const SurfaceMesh& mesh, MeshTopology& out, bool weld_equal_positions) {
-  return guard_status("mesh_topology", [&] { return mesh_topology_unguarded(mesh, out, weld_equal_positions); });
-}
-
-Status count_self_intersections(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
-  return guard_status("count_self_intersections",
-                      [&] { return count_self_intersections_unguarded(mesh, count, pairs); });
-}
-
-Status surface_distances(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
-                         SurfaceDistances& out) {
-  return guard_status("surface_distances", [&] { return surface_distances_unguarded(model, mesh, options, out); });
-}
-
-Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
-                           MeshQualityReport& out, bool weld_equal_positions) {
+Status mesh_quality_report_unguarded(const GwnModel& model, const SurfaceMesh& mesh,
+                                     const SurfaceDistanceOptions& options, MeshQualityReport& out,
+                                     bool weld_equal_positions) {
   out = MeshQualityReport{};
   const auto t0 = std::chrono::steady_clock::now();
   const auto since = [](std::chrono::steady_clock::time_point t) {
@@ -874,6 +860,39 @@ Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const
     return s;
   out.seconds = since(t0);
   return Status::Ok();
+}
+
+}  // namespace
+
+// Each entry's arrays reuse their large blocks while it runs (base/host_blocks.h).
+Status mesh_topology(const SurfaceMesh& mesh, MeshTopology& out, bool weld_equal_positions) {
+  return guard_status("mesh_topology", [&] {
+    const HostBlockScope blocks;
+    return mesh_topology_unguarded(mesh, out, weld_equal_positions);
+  });
+}
+
+Status count_self_intersections(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs) {
+  return guard_status("count_self_intersections", [&] {
+    const HostBlockScope blocks;
+    return count_self_intersections_unguarded(mesh, count, pairs);
+  });
+}
+
+Status surface_distances(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
+                         SurfaceDistances& out) {
+  return guard_status("surface_distances", [&] {
+    const HostBlockScope blocks;
+    return surface_distances_unguarded(model, mesh, options, out);
+  });
+}
+
+Status mesh_quality_report(const GwnModel& model, const SurfaceMesh& mesh, const SurfaceDistanceOptions& options,
+                           MeshQualityReport& out, bool weld_equal_positions) {
+  return guard_status("mesh_quality_report", [&] {
+    const HostBlockScope blocks;
+    return mesh_quality_report_unguarded(model, mesh, options, out, weld_equal_positions);
+  });
 }
 
 }  // namespace gwnrt

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <new>
+#include <vector>
 
 namespace gwnrt {
 
@@ -51,5 +52,9 @@ struct HostBlockAllocator {
     return true;
   }
 };
+
+// A std::vector on them (inside a HostBlockScope, its large blocks reused).
+template <class T>
+using HostVector = std::vector<T, HostBlockAllocator<T>>;
 
 }  // namespace gwnrt
