@@ -325,7 +325,20 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
     const vec3& lo = bounds[i].lo;
     order[i] = {extent[i] <= narrow ? g.key(cell_of(lo, 0), cell_of(lo, 1), cell_of(lo, 2)) : kWide, uint32_t(i)};
   });
-  tbb::parallel_sort(order.begin(), order.end());
+  const double cells = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]);
+  if (cells <= kMaxDenseGridCells) {
+    // By counting (keys below 2^22, the wide ones last): stable, so in index order within a key as
+    // the comparison sort leaves them, in O(n + cells).
+    HostVector<uint32_t> start(size_t(cells) + 2, 0);
+    const auto slot = [&](uint64_t key) { return key == kWide ? size_t(cells) : size_t(key); };
+    for (size_t i = 0; i < n; ++i) ++start[slot(order[i].first) + 1];
+    for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+    HostVector<std::pair<uint64_t, uint32_t>> sorted(n);
+    for (size_t i = 0; i < n; ++i) sorted[start[slot(order[i].first)]++] = order[i];
+    order.swap(sorted);
+  } else {
+    tbb::parallel_sort(order.begin(), order.end());
+  }
   g.narrow = n;
   while (g.narrow > 0 && order[g.narrow - 1].first == kWide) --g.narrow;
   g.input.resize(n);
@@ -340,7 +353,6 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
       g.run_begin.push_back(uint32_t(i));
     }
   g.run_begin.push_back(uint32_t(g.narrow));
-  const double cells = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]);
   if (cells <= kMaxDenseGridCells) {
     g.dense_run.assign(size_t(cells), -1);
     for (size_t r = 0; r < g.run_key.size(); ++r) g.dense_run[g.run_key[r]] = int32_t(r);
