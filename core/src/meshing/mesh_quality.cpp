@@ -84,6 +84,26 @@ struct HalfEdge {
   bool operator<(const HalfEdge& o) const { return key != o.key ? key < o.key : corner < o.corner; }
 };
 
+// The half-edges in (key, corner) order, as a comparison sort leaves them: counted into buckets
+// by their smaller vertex (the key's high half; ~0, the left-out ones, last) in corner order,
+// then each bucket (a vertex's few edges) sorted on its own. O(n + vertices).
+void sort_half_edges(HostVector<HalfEdge>& edges, size_t vertex_count) {
+  HostVector<uint32_t> start(vertex_count + 2, 0);
+  const auto bucket = [&](const HalfEdge& e) { return e.key == ~uint64_t(0) ? vertex_count : size_t(e.key >> 32); };
+  for (const HalfEdge& e : edges) ++start[bucket(e) + 1];
+  for (size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
+  HostVector<HalfEdge> sorted(edges.size());
+  {
+    HostVector<uint32_t> next(start.begin(), start.end() - 1);
+    for (const HalfEdge& e : edges) sorted[next[bucket(e)]++] = e;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, vertex_count, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v != r.end(); ++v)
+      std::sort(sorted.begin() + ptrdiff_t(start[v]), sorted.begin() + ptrdiff_t(start[v + 1]));
+  });
+  edges.swap(sorted);
+}
+
 Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld) {
   if (Status s = validate_surface_mesh(mesh, "mesh_topology"); !s.ok()) return s;
   MeshTopology topo;
@@ -131,7 +151,7 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
         edges[3 * t + k] = {key, uint32_t(3 * t + k)};
       }
   });
-  tbb::parallel_sort(edges.begin(), edges.end());
+  sort_half_edges(edges, vertex_count);
   edges.resize(3 * valid);
   for (size_t t = 0; t < n; ++t)
     if (kind[t] != 2)
