@@ -85,6 +85,8 @@ TEST(HostBlocks, AVectorOnThemHoldsItsValues) {
     for (size_t i = 0; i < v.size(); i += 4099) EXPECT_EQ(v[i], uint32_t(i * 2654435761u));
   }
   EXPECT_THROW((HostBlockAllocator<uint64_t>{}.allocate(SIZE_MAX / 4)), std::bad_array_new_length);
+  // A size that rounding up to whole huge pages would wrap is refused, not made small.
+  EXPECT_THROW(allocate_host_block(SIZE_MAX - 100, 16), std::bad_alloc);
 }
 
 }  // namespace

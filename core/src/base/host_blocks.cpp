@@ -40,7 +40,7 @@ uintptr_t map_block(size_t size) {
   if (p == MAP_FAILED) throw std::bad_alloc();
   const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kHugePage - 1) & ~(kHugePage - 1);
   if (aligned > start) unmap(start, aligned - start);
-  if (start + kHugePage > aligned) unmap(aligned + size, start + kHugePage - aligned);
+  unmap(aligned + size, start + kHugePage - aligned);  // the tail: at least a page
   madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
   return aligned;
 }
@@ -57,6 +57,7 @@ void unmap_kept(BlockCache& c) {
 void* allocate_host_block(size_t bytes, size_t alignment) {
 #ifdef __linux__
   if (bytes >= kLargeHostBlock && alignment <= kHugePage) {
+    if (bytes > SIZE_MAX - 2 * kHugePage) throw std::bad_alloc();  // rounded up, it would wrap
     const size_t size = mapped_size(bytes);
     BlockCache& c = cache();
     std::lock_guard<std::mutex> lock(c.mutex);
@@ -74,7 +75,12 @@ void* allocate_host_block(size_t bytes, size_t alignment) {
       unmap_kept(c);
       start = map_block(size);
     }
-    c.in_use.emplace(start, size);
+    try {
+      c.in_use.emplace(start, size);
+    } catch (...) {
+      unmap(start, size);
+      throw;
+    }
     return reinterpret_cast<void*>(start);
   }
 #endif
@@ -91,12 +97,15 @@ void free_host_block(void* block, size_t bytes, size_t alignment) noexcept {
     const auto it = c.in_use.find(start);
     const size_t size = it != c.in_use.end() ? it->second : mapped_size(bytes);
     if (it != c.in_use.end()) c.in_use.erase(it);
-    if (c.scopes > 0) {
-      c.kept.emplace(size, start);
-      c.kept_bytes += size;
-    } else {
-      unmap(start, size);
+    try {
+      if (c.scopes > 0) {
+        c.kept.emplace(size, start);
+        c.kept_bytes += size;
+        return;
+      }
+    } catch (...) {  // no room to keep it: given back instead
     }
+    unmap(start, size);
     return;
   }
 #endif
