@@ -3,8 +3,8 @@
 // meshing/dual_contouring.h over their items and compacts with exclusive scans. A backend
 // provides Array<T> (resize, which need not keep the contents but zero-fills, data, size, move),
 // parallel_for(n, fn[, grain, progress]), exclusive_scan(in, n, out) -> total (out may be in),
-// to_host(array, i)
-// for the few values the driver reads back, and move_out(array, std::vector&) for the output.
+// to_host(array, i) for the few values the driver reads back, and move_out(array, std::vector&)
+// for the output.
 // Every function the driver hands to parallel_for is a GWNRT_HD functor or a GWNRT_PASS lambda
 // (base/hd.h); it never touches host memory from inside one (the output is moved out whole).
 #pragma once
