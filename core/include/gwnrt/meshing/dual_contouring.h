@@ -1166,7 +1166,7 @@ struct CellMarkPass {
   }
 };
 
-// Vertices per marked cell of an active slot: one per surface component.
+// The surface components of each marked cell of an active slot (packed: its vertices, one each).
 struct CellPartsPass {
   SparseGridView view;
   uint32_t* cell_parts;
