@@ -84,24 +84,31 @@ struct HalfEdge {
   bool operator<(const HalfEdge& o) const { return key != o.key ? key < o.key : corner < o.corner; }
 };
 
-// The half-edges in (key, corner) order, as a comparison sort leaves them: counted into buckets
-// by their smaller vertex (the key's high half; ~0, the left-out ones, last) in corner order,
-// then each bucket (a vertex's few edges) sorted on its own. O(n + vertices).
+// `items` reordered by bucket_of(item), in [0, buckets), keeping their order within a bucket: by
+// counting, O(n + buckets). Returns where each bucket starts (buckets + 1 entries).
+template <class T, class BucketOf>
+HostVector<uint32_t> order_by_bucket(HostVector<T>& items, size_t buckets, BucketOf bucket_of) {
+  HostVector<uint32_t> start(buckets + 1, 0);
+  for (const T& x : items) ++start[bucket_of(x) + 1];
+  for (size_t b = 1; b <= buckets; ++b) start[b] += start[b - 1];
+  HostVector<T> ordered(items.size());
+  HostVector<uint32_t> next(start.begin(), start.end() - 1);
+  for (const T& x : items) ordered[next[bucket_of(x)]++] = x;
+  items.swap(ordered);
+  return start;
+}
+
+// The half-edges in (key, corner) order, as a comparison sort leaves them: bucketed by their
+// smaller vertex (the key's high half; ~0, the left-out ones, last) in corner order, then each
+// bucket (a vertex's few edges) sorted on its own. O(n + vertices).
 void sort_half_edges(HostVector<HalfEdge>& edges, size_t vertex_count) {
-  HostVector<uint32_t> start(vertex_count + 2, 0);
-  const auto bucket = [&](const HalfEdge& e) { return e.key == ~uint64_t(0) ? vertex_count : size_t(e.key >> 32); };
-  for (const HalfEdge& e : edges) ++start[bucket(e) + 1];
-  for (size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
-  HostVector<HalfEdge> sorted(edges.size());
-  {
-    HostVector<uint32_t> next(start.begin(), start.end() - 1);
-    for (const HalfEdge& e : edges) sorted[next[bucket(e)]++] = e;
-  }
+  const HostVector<uint32_t> start = order_by_bucket(edges, vertex_count + 1, [&](const HalfEdge& e) {
+    return e.key == ~uint64_t(0) ? vertex_count : size_t(e.key >> 32);
+  });
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vertex_count, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v != r.end(); ++v)
-      std::sort(sorted.begin() + ptrdiff_t(start[v]), sorted.begin() + ptrdiff_t(start[v + 1]));
+      std::sort(edges.begin() + ptrdiff_t(start[v]), edges.begin() + ptrdiff_t(start[v + 1]));
   });
-  edges.swap(sorted);
 }
 
 Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld) {
@@ -347,15 +354,11 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   });
   const double cells = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]);
   if (cells <= kMaxDenseGridCells) {
-    // By counting (keys below 2^22, the wide ones last): stable, so in index order within a key as
-    // the comparison sort leaves them, in O(n + cells).
-    HostVector<uint32_t> start(size_t(cells) + 2, 0);
-    const auto slot = [&](uint64_t key) { return key == kWide ? size_t(cells) : size_t(key); };
-    for (size_t i = 0; i < n; ++i) ++start[slot(order[i].first) + 1];
-    for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
-    HostVector<std::pair<uint64_t, uint32_t>> sorted(n);
-    for (size_t i = 0; i < n; ++i) sorted[start[slot(order[i].first)]++] = order[i];
-    order.swap(sorted);
+    // By counting (keys below 2^22, the wide ones last), in index order within a key as the
+    // comparison sort leaves them.
+    order_by_bucket(order, size_t(cells) + 1, [&](const std::pair<uint64_t, uint32_t>& o) {
+      return o.first == kWide ? size_t(cells) : size_t(o.first);
+    });
   } else {
     tbb::parallel_sort(order.begin(), order.end());
   }

@@ -775,8 +775,8 @@ struct EdgesOfCorner {
   GWNRT_HD uint32_t operator()(uint64_t item) const { return uint32_t(bit_count(edge_mask[item])); }
 };
 struct VerticesOfCell {
-  const uint32_t* cell_parts;
-  GWNRT_HD uint32_t operator()(uint64_t item) const { return uint32_t(packed_count(cell_parts[item])); }
+  SparseGridView view;  // its cell_parts set
+  GWNRT_HD uint32_t operator()(uint64_t item) const { return view.cell_vertex_count(item); }
 };
 static_assert(3 * kBlockItems <= 65535 && 4 * kBlockItems <= 65535, "a slot's offsets fit 16 bits");
 

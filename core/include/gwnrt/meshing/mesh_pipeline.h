@@ -428,10 +428,10 @@ Status solve_cell_vertices(Backend& backend, MemoryBudget& budget, SparseGridArr
   multi.resize(1);
   backend.parallel_for(items, CellPartsPass{g.view, g.cell_parts.data(), multi.data()});
   stats.multi_component_cells = backend.to_host(multi, 0);
-  backend.parallel_for(g.slots, SlotOffsetsPass<VerticesOfCell>{
-                                    {g.cell_parts.data()}, g.vertex_in_slot.data(), g.slot_first_vertex.data()});
-  v.total = backend.exclusive_scan(g.slot_first_vertex.data(), g.slots, g.slot_first_vertex.data());
   g.view.cell_parts = g.cell_parts.data();
+  backend.parallel_for(g.slots,
+                       SlotOffsetsPass<VerticesOfCell>{{g.view}, g.vertex_in_slot.data(), g.slot_first_vertex.data()});
+  v.total = backend.exclusive_scan(g.slot_first_vertex.data(), g.slots, g.slot_first_vertex.data());
   if (Status s = budget.reserve(v.total * (2 * sizeof(vec3) + sizeof(uint64_t)), "the vertices"); !s.ok()) return s;
   g.view.vertex_in_slot = g.vertex_in_slot.data();
   g.view.slot_first_vertex = g.slot_first_vertex.data();
