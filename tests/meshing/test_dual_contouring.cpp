@@ -88,6 +88,74 @@ TEST(MeshingCorners, LatticeJumpsAreEachLinesOwn) {
   EXPECT_GT(crossed, 10000) << "the lines hardly met the meshes";
 }
 
+// The jumps CornerJumpsPass keeps for the edges' bounds: each corner's own walk along its slot's
+// bound's ray where they fit a byte, kUnknownJumps where they do not or the slot has no bound. Nested
+// cubes, each open on one face in turn, so that every ray out of the middle crosses over 127.
+TEST(MeshingCorners, KeptJumpsAreEachCornersOwnOrUnknown) {
+  constexpr int kShells = 200;
+  Mesh nested;
+  const Mesh cube = test::make_cube();
+  for (int k = 0; k < kShells; ++k) {
+    const uint32_t first = uint32_t(nested.positions.size());
+    for (const vec3& p : cube.positions) nested.positions.push_back(p * (1.0f + 0.1f * float(k)));
+    for (size_t t = 0; t < cube.triangles.size(); ++t)
+      if (t / 2 != size_t(k % 6)) nested.triangles.push_back(cube.triangles[t] + first);
+  }
+  const GwnModel model = test::build_model(nested);
+  const ModelView view = model.view();
+  // Four blocks a side over the middle, from the innermost cubes out to about the 50th.
+  MeshGrid grid;
+  grid.origin = vec3(-6.0f);
+  grid.cell = 12.0f / float(4 * kBlockCells);
+  for (int a = 0; a < 3; ++a) {
+    grid.cells[a] = 4 * kBlockCells;
+    grid.blocks[a] = 4;
+  }
+  const uint32_t slots = uint32_t(grid.block_count());
+  std::vector<uint32_t> block_of_slot(slots);
+  std::vector<BlockWinding> bound(slots);
+  for (uint32_t s = 0; s < slots; ++s) {
+    block_of_slot[s] = s;
+    bound[s].block = s % 7 != 0;  // every seventh slot without a bound: its rays are block_ray's
+    bound[s].axis = int32_t(s % 3);
+    bound[s].sign = s % 2 ? 1.0f : -1.0f;
+  }
+  SparseGridView grid_view;
+  grid_view.grid = grid;
+  grid_view.block_of_slot = block_of_slot.data();
+  std::vector<float> values(size_t(slots) * kBlockItems);
+  std::vector<int8_t> kept(values.size(), 0);
+  WindingOptions winding;
+  winding.method = WindingMethod::kCrossing;
+  const CornerJumpsPass pass{grid_view, view, winding, bound.data(), values.data(), kept.data()};
+  int fitting = 0, beyond = 0;
+  for (uint32_t s = 0; s < slots; ++s) {
+    pass(s);
+    const GridCoord b = grid.block_of_index(s);
+    for (uint32_t local = 0; local < kBlockItems; ++local) {
+      const int8_t j = kept[size_t(s) * kBlockItems + local];
+      if (!bound[s].any()) {
+        EXPECT_EQ(j, kUnknownJumps) << "slot " << s;
+        continue;
+      }
+      const GridCoord l = local_coord(local);
+      const vec3 points[1] = {
+          grid.corner_position({b.x * kBlockCells + l.x, b.y * kBlockCells + l.y, b.z * kBlockCells + l.z})};
+      int own[1];
+      mesh_jumps_along_axis(view, points, bound[s].axis, bound[s].sign, own);
+      if (own[0] > INT8_MIN && own[0] <= INT8_MAX) {
+        ASSERT_EQ(j, own[0]) << "slot " << s << " corner " << local;
+        ++fitting;
+      } else {
+        ASSERT_EQ(j, kUnknownJumps) << "slot " << s << " corner " << local << ": " << own[0] << " jumps";
+        ++beyond;
+      }
+    }
+  }
+  EXPECT_GT(fitting, 1000);
+  EXPECT_GT(beyond, 1000);
+}
+
 // The corner pass's screened values: the same side of the level as the exact w, whatever the
 // level, also levels within a hair of w itself.
 TEST(MeshingCorners, ScreenedValuesHaveTheExactSigns) {

@@ -538,12 +538,18 @@ GWNRT_HD inline bool is_deferred_corner(float f, int& mesh_jumps) {
 // Per slot, with the exact method: M's jumps ahead of each corner along the slot's ray, for all
 // its columns in one walk (block_jumps), stored in the corner's value by its bits until
 // CornerColumnPass reads them and writes the value over them.
+// A corner's jumps that did not fit corner_jumps' byte, or were taken along no bound's ray.
+inline constexpr int8_t kUnknownJumps = INT8_MIN;
+
 struct CornerJumpsPass {
   SparseGridView view;
   ModelView model;
   WindingOptions winding;
   const BlockWinding* block_winding;  // per slot, or nullptr
   float* corner_value;
+  // Per item, or nullptr: the jumps again along the bound's ray, for the edges' bounds
+  // (HermitePass::edge_bound), where a walk per edge had cost a tenth of the edges on a scan.
+  int8_t* corner_jumps = nullptr;
 
   GWNRT_HD void operator()(uint64_t slot) const {
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
@@ -552,9 +558,14 @@ struct CornerJumpsPass {
     int jumps[kBlockCells * kBlockCells][kBlockCells];
     block_jumps(model.triangles, view.grid, b, ray.axis, ray.sign, jumps);
     float* out = corner_value + slot * kBlockItems;
+    int8_t* kept = corner_jumps ? corner_jumps + slot * kBlockItems : nullptr;
     for (uint32_t column = 0; column < kBlockCells * kBlockCells; ++column)
-      for (int k = 0; k < kBlockCells; ++k)
-        out[local_index(column_corner(column, k, ray.axis, ray.sign))] = bits_float(uint32_t(jumps[column][k]));
+      for (int k = 0; k < kBlockCells; ++k) {
+        const uint32_t local = local_index(column_corner(column, k, ray.axis, ray.sign));
+        const int j = jumps[column][k];
+        out[local] = bits_float(uint32_t(j));
+        if (kept) kept[local] = ray.bound && j > INT8_MIN && j <= INT8_MAX ? int8_t(j) : kUnknownJumps;
+      }
   }
 };
 
@@ -797,6 +808,7 @@ struct HermitePass {
   WindingOptions winding;
   float level;
   const BlockWinding* block_winding;  // per slot, or nullptr
+  const int8_t* corner_jumps;         // per item (CornerJumpsPass), or nullptr
   const uint64_t* edges;
   HermitePoint* hermite;
   bool defer_normals = false;  // smooth roots' normals left to NormalBatchPass
@@ -837,10 +849,13 @@ struct HermitePass {
     out.point = *c[i].point;
     out.bounds = *c[i].bounds;
     out.centre = c[i].centre(view.grid, b);
-    const vec3 points[1] = {p0};
-    int jumps[1];
-    mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
-    out.jumps = jumps[0];
+    out.jumps = corner_jumps ? corner_jumps[corner] : kUnknownJumps;
+    if (out.jumps == kUnknownJumps) {
+      const vec3 points[1] = {p0};
+      int jumps[1];
+      mesh_jumps_along_axis(model, points, w.axis, w.sign, jumps);
+      out.jumps = jumps[0];
+    }
     return true;
   }
 };

@@ -163,6 +163,7 @@ struct SparseGridArrays {
   Array<uint32_t> slot_of_block, block_of_slot, needed_from;
   Array<float> corner_value;
   Array<BlockWinding> block_winding;  // per slot, with the exact method and a cone
+  Array<int8_t> corner_jumps;         // per item, with block_winding (CornerJumpsPass)
   Array<uint8_t> edge_mask;
   Array<uint16_t> edge_in_slot, vertex_in_slot;
   Array<uint32_t> slot_first_edge, slot_first_vertex;
@@ -291,10 +292,11 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
-  // Per item: the corner value, edge mask, cell parts, and the edges' and vertices' offsets in the
-  // slot; per slot: its first edge and vertex, the block map's words, the block winding.
+  // Per item: the corner value and jumps, edge mask, cell parts, and the edges' and vertices'
+  // offsets in the slot; per slot: its first edge and vertex, the block map's words, the block
+  // winding.
   const uint64_t per_slot =
-      uint64_t(kBlockItems) * (sizeof(float) + 1 + sizeof(uint32_t) + 2 * sizeof(uint16_t)) + 16 + sizeof(BlockWinding);
+      uint64_t(kBlockItems) * (sizeof(float) + 2 + sizeof(uint32_t) + 2 * sizeof(uint16_t)) + 16 + sizeof(BlockWinding);
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -342,8 +344,11 @@ void evaluate_corners(Backend& backend, const ModelView& model, const MeshingOpt
 #endif
     block_winding = g.block_winding.data();
   }
+  if (block_winding) g.corner_jumps.resize(g.slots * kBlockItems);
   if (resolve_winding_method(model, options.winding.method) == WindingMethod::kCrossing)
-    backend.parallel_for(g.slots, CornerJumpsPass{g.view, model, options.winding, block_winding, g.corner_value.data()},
+    backend.parallel_for(g.slots,
+                         CornerJumpsPass{g.view, model, options.winding, block_winding, g.corner_value.data(),
+                                         block_winding ? g.corner_jumps.data() : nullptr},
                          16);
   const uint64_t columns = g.slots * kBlockCells * kBlockCells;
   if (options.progress_total) options.progress_total->fetch_add(columns);
@@ -387,8 +392,10 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   if (options.progress_total) options.progress_total->fetch_add(e.total);
   const bool batched = kBatchedConeSums && sums_cone(model, options);
   const BlockWinding* block_winding = g.block_winding.size() ? g.block_winding.data() : nullptr;
-  const HermitePass walks{g.view,           model,   options.winding, options.level, block_winding, e.edges.data(),
-                          e.hermite.data(), batched, batched,         batched};
+  const int8_t* corner_jumps = g.corner_jumps.size() ? g.corner_jumps.data() : nullptr;
+  const HermitePass walks{g.view,        model,        options.winding, options.level,
+                          block_winding, corner_jumps, e.edges.data(),  e.hermite.data(),
+                          batched,       batched,      batched};
   backend.parallel_for(e.total, walks, 16, options.progress);
   if constexpr (kBatchedConeSums)
     if (batched) {
@@ -402,6 +409,9 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
       backend.parallel_for(g.slots, NormalBatchPass{model, options.winding, e.edges.data(), e.total, e.hermite.data()},
                            1);
     }
+  // Read by the corners and edges alone: their blocks go to the passes after.
+  g.block_winding = typename Backend::template Array<BlockWinding>{};
+  g.corner_jumps = typename Backend::template Array<int8_t>{};
   stats.crossing_edges = e.total;
   typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
   tally.resize(kHermiteTallies);
