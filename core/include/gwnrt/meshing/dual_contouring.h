@@ -535,12 +535,13 @@ GWNRT_HD inline bool is_deferred_corner(float f, int& mesh_jumps) {
   return (bits & 0xffc00000u) == 0xffc00000u && (bits & 0x3fffffu) != 0;
 }
 
+// A kept corner's jumps (CornerJumpsPass::corner_jumps) that did not fit its byte, or were taken
+// along no bound's ray.
+inline constexpr int8_t kUnknownJumps = INT8_MIN;
+
 // Per slot, with the exact method: M's jumps ahead of each corner along the slot's ray, for all
 // its columns in one walk (block_jumps), stored in the corner's value by its bits until
 // CornerColumnPass reads them and writes the value over them.
-// A corner's jumps that did not fit corner_jumps' byte, or were taken along no bound's ray.
-inline constexpr int8_t kUnknownJumps = INT8_MIN;
-
 struct CornerJumpsPass {
   SparseGridView view;
   ModelView model;
@@ -548,7 +549,7 @@ struct CornerJumpsPass {
   const BlockWinding* block_winding;  // per slot, or nullptr
   float* corner_value;
   // Per item, or nullptr: the jumps again along the bound's ray, for the edges' bounds
-  // (HermitePass::edge_bound), where a walk per edge had cost a tenth of the edges on a scan.
+  // (HermitePass::edge_bound), where a walk per edge had cost a tenth of the edges' time on a scan.
   int8_t* corner_jumps = nullptr;
 
   GWNRT_HD void operator()(uint64_t slot) const {
