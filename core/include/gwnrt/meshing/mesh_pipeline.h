@@ -164,6 +164,8 @@ struct SparseGridArrays {
   Array<float> corner_value;
   Array<BlockWinding> block_winding;  // per slot, with the exact method and a cone
   Array<int8_t> corner_jumps;         // per item, with block_winding (CornerJumpsPass)
+  // What a slot holds of those two, reserved with the slot and released when find_edges frees them.
+  static constexpr uint64_t kBoundBytesPerSlot = sizeof(BlockWinding) + kBlockItems * sizeof(int8_t);
   Array<uint8_t> edge_mask;
   Array<uint16_t> edge_in_slot, vertex_in_slot;
   Array<uint32_t> slot_first_edge, slot_first_vertex;
@@ -292,11 +294,11 @@ Status assign_slots(Backend& backend, const MeshGrid& grid, const typename Backe
     backend.parallel_for(block_count, [=] GWNRT_PASS(uint64_t i) { f[i] = needed[i] != 0; });
   }
   const uint64_t slots = backend.exclusive_scan(is_slot.data(), block_count, g.slot_of_block.data());
-  // Per item: the corner value and jumps, edge mask, cell parts, and the edges' and vertices'
-  // offsets in the slot; per slot: its first edge and vertex, the block map's words, the block
-  // winding.
-  const uint64_t per_slot =
-      uint64_t(kBlockItems) * (sizeof(float) + 2 + sizeof(uint32_t) + 2 * sizeof(uint16_t)) + 16 + sizeof(BlockWinding);
+  // Per item: the corner value, edge mask, cell parts, and the edges' and vertices' offsets in the
+  // slot; per slot: its first edge and vertex, the block map's words, and the corners' bound (the
+  // block winding and the corners' kept jumps).
+  const uint64_t per_slot = uint64_t(kBlockItems) * (sizeof(float) + 1 + sizeof(uint32_t) + 2 * sizeof(uint16_t)) + 16 +
+                            SparseGridArrays<Backend>::kBoundBytesPerSlot;
   if (Status s = budget.reserve(slots * per_slot, "the corners and cells of the blocks S may meet"); !s.ok()) return s;
   g.block_of_slot.resize(slots);
   g.needed_from.resize(slots);
@@ -412,6 +414,7 @@ Status find_edges(Backend& backend, const ModelView& model, const MeshingOptions
   // Read by the corners and edges alone: their blocks go to the passes after.
   g.block_winding = typename Backend::template Array<BlockWinding>{};
   g.corner_jumps = typename Backend::template Array<int8_t>{};
+  budget.release(g.slots * SparseGridArrays<Backend>::kBoundBytesPerSlot);
   stats.crossing_edges = e.total;
   typename Backend::template Array<unsigned long long> tally;  // HermiteTally's counters, zeroed
   tally.resize(kHermiteTallies);
