@@ -445,7 +445,7 @@ TEST(MeshQualityDistances, SheetPointsLieOnTheSheetsOnly) {
 }
 
 // S's points find their nearest output triangles in the grid's rings of cells, among the wide
-// triangles by their own tree, or, beyond the rings, by a tree over all: the same distances
+// triangles by their own tree, or, beyond the rings, in blocks of cells by a tree: the same distances
 // whichever finds them. The output: a coarse sphere with a cap cut off (points of S by the hole
 // lie beyond the rings) and every other triangle split in sixteen (the unsplit ones are wide); again
 // with a speck far away, whose grid has too many cells for a map (two rings, looked up by search).

@@ -382,6 +382,93 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   }
 }
 
+// The grid's cells in blocks of kFarBlockCells along each axis, with a BVH over the blocks'
+// boxes: the nearest narrow triangles to a point beyond the rings, without a tree over every
+// triangle (building one took most of the report's distances where a few points of S lie far
+// from the output).
+inline constexpr uint64_t kFarBlockCells = 4;
+
+struct GridBlocks {
+  HostVector<uint32_t> runs;         // the grid's runs, block by block
+  HostVector<uint32_t> block_begin;  // block b holds runs[block_begin[b], block_begin[b + 1])
+  WideBvh bvh;                       // over the blocks' boxes
+};
+
+Status build_grid_blocks(const TriangleGrid& g, GridBlocks& out) {
+  const size_t run_count = g.run_key.size();
+  uint64_t blocks_along[3];
+  for (int a = 0; a < 3; ++a) blocks_along[a] = (g.dims[a] + kFarBlockCells - 1) / kFarBlockCells;
+  HostVector<std::pair<uint64_t, uint32_t>> order(run_count);
+  tbb::parallel_for(size_t(0), run_count, [&](size_t r) {
+    const uint64_t key = g.run_key[r];
+    const uint64_t c[3] = {key % g.dims[0], key / g.dims[0] % g.dims[1], key / g.dims[0] / g.dims[1]};
+    const uint64_t block =
+        c[0] / kFarBlockCells + blocks_along[0] * (c[1] / kFarBlockCells + blocks_along[1] * (c[2] / kFarBlockCells));
+    order[r] = {block, uint32_t(r)};
+  });
+  tbb::parallel_sort(order.begin(), order.end());
+  out = GridBlocks{};
+  out.runs.resize(run_count);
+  std::vector<Aabb> box;
+  for (size_t i = 0; i < run_count; ++i) {
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      out.block_begin.push_back(uint32_t(i));
+      box.emplace_back();
+    }
+    const uint32_t run = order[i].second;
+    out.runs[i] = run;
+    for (uint32_t j = g.run_begin[run]; j < g.run_begin[run + 1]; ++j) {
+      box.back().extend(g.box[j].lo);
+      box.back().extend(g.box[j].hi);
+    }
+  }
+  out.block_begin.push_back(uint32_t(run_count));
+  return build_wide_bvh(box, 1, out.bvh);
+}
+
+// fn(grid index) for every narrow triangle whose box lies within reach() of x (read before each
+// block and triangle, so that a nearest search can shrink it), nearer blocks first.
+template <class Reach, class Fn>
+void for_each_narrow_near(const TriangleGrid& g, const GridBlocks& blocks, const vec3& x, Reach reach, Fn fn) {
+  if (blocks.block_begin.size() < 2) return;
+  const dvec3 xd(x);
+  const auto within = [&](float d2) {
+    const float r = float(reach()) * (1 + 1e-6f);  // float boxes and x: past their round-off
+    return d2 <= r * r;
+  };
+  const auto visit_block = [&](uint32_t b) {
+    for (uint32_t i = blocks.block_begin[b]; i < blocks.block_begin[b + 1]; ++i) {
+      const uint32_t run = blocks.runs[i];
+      for (uint32_t j = g.run_begin[run]; j < g.run_begin[run + 1]; ++j) {
+        const dvec3 gap = glm::max(glm::max(dvec3(g.box[j].lo) - xd, xd - dvec3(g.box[j].hi)), dvec3(0.0));
+        const double r = reach();
+        if (glm::dot(gap, gap) <= r * r) fn(j);
+      }
+    }
+  };
+  uint32_t stack[kTraversalStackSize];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const WideNode& node = blocks.bvh.nodes[stack[--sp]];
+    float d2[kBvhWidth];
+    int lanes[kBvhWidth], count = 0;
+    for (int l = 0; l < kBvhWidth; ++l) {
+      d2[l] = detail::box_distance2(node, l, x);
+      if (node.child[l] != kEmptyLane && within(d2[l])) lanes[count++] = l;
+    }
+    std::sort(lanes, lanes + count, [&](int a, int b) { return d2[a] < d2[b]; });
+    for (int k = count; k-- > 0;)  // the nearer popped first
+      if (node.count[lanes[k]] == 0) stack[sp++] = node.child[lanes[k]];
+    for (int k = 0; k < count; ++k) {
+      const int l = lanes[k];
+      if (node.count[l] == 0 || !within(d2[l])) continue;
+      for (uint32_t p = node.child[l]; p < node.child[l] + node.count[l]; ++p)
+        visit_block(blocks.bvh.primitive_order[p]);
+    }
+  }
+}
+
 Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs,
                                           const TriangleGrid* shared_grid = nullptr) {
   if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
@@ -555,7 +642,8 @@ void for_each_near(const TriangleTreeView& tree, const vec3& x, float r, Fn fn) 
   while (sp > 0) {
     const WideNode& node = tree.bvh.nodes[stack[--sp]];
     for (int l = 0; l < kBvhWidth; ++l) {
-      if (!(detail::box_distance2(node, l, x) <= r2)) continue;
+      // An empty lane's inverted box is at distance +inf: within an infinite r all the same.
+      if (node.child[l] == kEmptyLane || !(detail::box_distance2(node, l, x) <= r2)) continue;
       if (node.count[l] == 0) {
         stack[sp++] = node.child[l];
         continue;
@@ -697,17 +785,10 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
 
   // S -> output: the output's triangles of non-zero area in rings of the grid's cells around each
   // point, and the wide ones near it by a tree over them. Where the nearest is not nearer than
-  // anything beyond the rings can be (a point far from the output), a tree over all of them.
+  // anything beyond the rings can be (a point far from the output), blocks of cells by a tree.
   TriangleGrid own_grid;
   if (!shared_grid) build_triangle_grid(mesh, own_grid);
   const TriangleGrid& grid = shared_grid ? *shared_grid : own_grid;
-  Mesh output;  // for the trees, where one is needed
-  const auto fill_output = [&] {
-    if (output.triangles.empty()) {
-      output.positions = mesh.positions;
-      output.triangles = mesh.triangles;
-    }
-  };
   Aabb output_box;
   for (const Aabb& b : grid.box) {
     output_box.extend(b.lo);
@@ -718,7 +799,9 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
   TriangleTree wide_tree;
   if (grid.narrow < grid.input.size()) {
     const HostVector<uint32_t> wide(grid.input.begin() + ptrdiff_t(grid.narrow), grid.input.end());
-    fill_output();
+    Mesh output;
+    output.positions = mesh.positions;
+    output.triangles = mesh.triangles;
     if (Status s = build_triangle_tree(output, wide, 4, wide_tree, TreeMoments::kWithout); !s.ok()) return s;
   }
   const TriangleTreeView wide_view = wide_tree.view();
@@ -817,33 +900,34 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
     }
   });
   if (std::find(far.begin(), far.end(), uint8_t(1)) != far.end()) {
-    TriangleTree tree;
-    fill_output();
-    if (Status s = build_triangle_tree(output, grid.input, 4, tree, TreeMoments::kWithout); !s.ok()) return s;
-    const TriangleTreeView tview = tree.view();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, surface_points.size(), 64),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t k = r.begin(); k != r.end(); ++k) {
-                          if (!far[k]) continue;
-                          const vec3 x = surface_points[k].position;
-                          const NearestPrimitive nearest = unsigned_distance(tview, x);
-                          if (!(nearest.distance < kInfinity)) {
-                            from_surface[k] = std::numeric_limits<double>::infinity();
-                            deviation[k] = -1;  // no output: no normal to compare
-                            continue;
-                          }
-                          const auto each_near = [&](auto&&, double reach, auto&& fn) {
-                            for_each_near(tview, x, float(reach), [&](uint32_t i) { fn(tview.triangle_ids[i]); });
-                          };
-                          measure(dvec3(x), dvec3(surface_points[k].normal), each_near,
-                                  double(nearest.distance) + 2 * tie, from_surface[k], deviation[k]);
-                          if (!(deviation[k] < std::numeric_limits<double>::infinity()))
-                            deviation[k] = angle_deg(dvec3(surface_points[k].normal),
-                                                     output_normal(mesh, nearest.primitive, nearest.u, nearest.v));
-                          if (!(from_surface[k] < std::numeric_limits<double>::infinity()))
-                            from_surface[k] = nearest.distance;
-                        }
-                      });
+    GridBlocks blocks;
+    if (Status s = build_grid_blocks(grid, blocks); !s.ok()) return s;
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, surface_points.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t k = r.begin(); k != r.end(); ++k) {
+            if (!far[k]) continue;
+            const vec3 x = surface_points[k].position;
+            const dvec3 xd(x);
+            // The nearest: the wide triangles' by their tree, then the narrow ones' within that.
+            double best = std::numeric_limits<double>::infinity();
+            if (const NearestPrimitive wide = unsigned_distance(wide_view, x); wide.distance < kInfinity)
+              best = glm::length(closest(wide.primitive, xd).point - xd);
+            for_each_narrow_near(
+                grid, blocks, x, [&] { return best; },
+                [&](uint32_t j) { best = std::min(best, glm::length(closest(grid.input[j], xd).point - xd)); });
+            if (!(best < std::numeric_limits<double>::infinity())) {  // no output triangle of non-zero area
+              from_surface[k] = std::numeric_limits<double>::infinity();
+              deviation[k] = -1;  // no output: no normal to compare
+              continue;
+            }
+            const auto each_near = [&](auto&& reach, double wide_reach, auto&& fn) {
+              for_each_narrow_near(grid, blocks, x, reach, [&](uint32_t j) { fn(grid.input[j]); });
+              for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
+                            [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
+            };
+            measure(xd, dvec3(surface_points[k].normal), each_near, best + 2 * tie, from_surface[k], deviation[k]);
+          }
+        });
   }
   uint64_t normals = 0;
   for (size_t k = 0; k < surface_points.size(); ++k) {
