@@ -457,7 +457,8 @@ void for_each_narrow_near(const TriangleGrid& g, const GridBlocks& blocks, const
       d2[l] = detail::box_distance2(node, l, x);
       if (node.child[l] != kEmptyLane && within(d2[l])) lanes[count++] = l;
     }
-    std::sort(lanes, lanes + count, [&](int a, int b) { return d2[a] < d2[b]; });
+    for (int i = 1; i < count; ++i)  // by distance (std::sort on four trips GCC's -Warray-bounds)
+      for (int k = i; k > 0 && d2[lanes[k]] < d2[lanes[k - 1]]; --k) std::swap(lanes[k], lanes[k - 1]);
     for (int k = count; k-- > 0;)  // the nearer popped first
       if (node.count[lanes[k]] == 0) stack[sp++] = node.child[lanes[k]];
     for (int k = 0; k < count; ++k) {
