@@ -810,15 +810,11 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
     const uvec3 v = mesh.triangles[t];
     return closest_point_on_triangle(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]), xd);
   };
-  // The nearest distance in double over the triangles near enough to matter, then among those as
+  // The nearest distance `best` found (in double, over every triangle), among the triangles as
   // near to round-off the normal that agrees best with S's. each_near(reach, wide_reach, fn):
-  // fn(triangle) for every triangle of the output within reach() or wide_reach, and maybe others;
-  // the nearest lies within `reach`.
-  const auto measure = [&](const dvec3& xd, const dvec3& ns, auto&& each_near, double reach, double& from,
+  // fn(triangle) for every triangle of the output within reach() or wide_reach, and maybe others.
+  const auto measure = [&](const dvec3& xd, const dvec3& ns, auto&& each_near, double best, double& from,
                            double& angle) {
-    double best = std::numeric_limits<double>::infinity();
-    each_near([&] { return std::min(best, reach); }, reach,
-              [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); });
     const double near = best + 2 * tie;
     angle = std::numeric_limits<double>::infinity();
     each_near([&] { return near; }, near,
@@ -897,7 +893,10 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
         far[k] = 1;
         continue;
       }
-      measure(xd, dvec3(surface_points[k].normal), each_near, best + 2 * tie, from_surface[k], deviation[k]);
+      // The wide triangles as near as the narrow ones' nearest, or nearer.
+      for_each_near(wide_view, x, float(best + 2 * tie) * (1 + 1e-6f),
+                    [&](uint32_t i) { nearer(wide_view.triangle_ids[i]); });
+      measure(xd, dvec3(surface_points[k].normal), each_near, best, from_surface[k], deviation[k]);
     }
   });
   if (std::find(far.begin(), far.end(), uint8_t(1)) != far.end()) {
@@ -911,11 +910,14 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
             const dvec3 xd(x);
             // The nearest: the wide triangles' by their tree, then the narrow ones' within that.
             double best = std::numeric_limits<double>::infinity();
+            const auto nearer = [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); };
             if (const NearestPrimitive wide = unsigned_distance(wide_view, x); wide.distance < kInfinity)
               best = glm::length(closest(wide.primitive, xd).point - xd);
             for_each_narrow_near(
-                grid, blocks, x, [&] { return best; },
-                [&](uint32_t j) { best = std::min(best, glm::length(closest(grid.input[j], xd).point - xd)); });
+                grid, blocks, x, [&] { return best; }, [&](uint32_t j) { nearer(grid.input[j]); });
+            // Any wide triangle nearer in double than the one the tree found in float.
+            for_each_near(wide_view, x, float(best + 2 * tie) * (1 + 1e-6f),
+                          [&](uint32_t i) { nearer(wide_view.triangle_ids[i]); });
             if (!(best < std::numeric_limits<double>::infinity())) {  // no output triangle of non-zero area
               from_surface[k] = std::numeric_limits<double>::infinity();
               deviation[k] = -1;  // no output: no normal to compare
@@ -926,7 +928,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
               for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
                             [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
             };
-            measure(xd, dvec3(surface_points[k].normal), each_near, best + 2 * tie, from_surface[k], deviation[k]);
+            measure(xd, dvec3(surface_points[k].normal), each_near, best, from_surface[k], deviation[k]);
           }
         });
   }
