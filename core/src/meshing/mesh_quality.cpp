@@ -382,6 +382,12 @@ void build_triangle_grid(const SurfaceMesh& mesh, TriangleGrid& g) {
   }
 }
 
+// Whether box b lies within r of x, in double (the grid's triangles' boxes, for the nearest ones).
+inline bool box_within(const Aabb& b, const dvec3& x, double r) {
+  const dvec3 gap = glm::max(glm::max(dvec3(b.lo) - x, x - dvec3(b.hi)), dvec3(0.0));
+  return glm::dot(gap, gap) <= r * r;
+}
+
 // The grid's cells in blocks of kFarBlockCells along each axis, with a BVH over the blocks'
 // boxes: the nearest narrow triangles to a point beyond the rings, without a tree over every
 // triangle (building one took most of the report's distances where a few points of S lie far
@@ -439,11 +445,8 @@ void for_each_narrow_near(const TriangleGrid& g, const GridBlocks& blocks, const
   const auto visit_block = [&](uint32_t b) {
     for (uint32_t i = blocks.block_begin[b]; i < blocks.block_begin[b + 1]; ++i) {
       const uint32_t run = blocks.runs[i];
-      for (uint32_t j = g.run_begin[run]; j < g.run_begin[run + 1]; ++j) {
-        const dvec3 gap = glm::max(glm::max(dvec3(g.box[j].lo) - xd, xd - dvec3(g.box[j].hi)), dvec3(0.0));
-        const double r = reach();
-        if (glm::dot(gap, gap) <= r * r) fn(j);
-      }
+      for (uint32_t j = g.run_begin[run]; j < g.run_begin[run + 1]; ++j)
+        if (box_within(g.box[j], xd, reach())) fn(j);
     }
   };
   uint32_t stack[kTraversalStackSize];
@@ -853,12 +856,8 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
       // within reach(), read before each, and the wide ones within wide_reach (none when negative).
       const auto each_near_from = [&](size_t first, auto&& reach, double wide_reach, auto&& fn) {
         for (size_t i = first; i < runs.size(); ++i)
-          for (uint32_t j = grid.run_begin[size_t(runs[i])]; j < grid.run_begin[size_t(runs[i]) + 1]; ++j) {
-            const Aabb& b = grid.box[j];
-            const dvec3 gap = glm::max(glm::max(dvec3(b.lo) - xd, xd - dvec3(b.hi)), dvec3(0.0));
-            const double r = reach();
-            if (glm::dot(gap, gap) <= r * r) fn(grid.input[j]);
-          }
+          for (uint32_t j = grid.run_begin[size_t(runs[i])]; j < grid.run_begin[size_t(runs[i]) + 1]; ++j)
+            if (box_within(grid.box[j], xd, reach())) fn(grid.input[j]);
         if (wide_reach >= 0.0)
           for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
                         [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
@@ -908,14 +907,12 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
             if (!far[k]) continue;
             const vec3 x = surface_points[k].position;
             const dvec3 xd(x);
-            // The nearest: the wide triangles' by their tree, then the narrow ones' within that.
+            // The nearest: the narrow triangles' by the blocks, then the wide ones as near or nearer
+            // (all of them where no narrow one is).
             double best = std::numeric_limits<double>::infinity();
             const auto nearer = [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); };
-            if (const NearestPrimitive wide = unsigned_distance(wide_view, x); wide.distance < kInfinity)
-              best = glm::length(closest(wide.primitive, xd).point - xd);
             for_each_narrow_near(
                 grid, blocks, x, [&] { return best; }, [&](uint32_t j) { nearer(grid.input[j]); });
-            // Any wide triangle nearer in double than the one the tree found in float.
             for_each_near(wide_view, x, float(best + 2 * tie) * (1 + 1e-6f),
                           [&](uint32_t i) { nearer(wide_view.triangle_ids[i]); });
             if (!(best < std::numeric_limits<double>::infinity())) {  // no output triangle of non-zero area
