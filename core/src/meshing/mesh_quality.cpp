@@ -111,7 +111,9 @@ void sort_half_edges(HostVector<HalfEdge>& edges, size_t vertex_count) {
   });
 }
 
-Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld) {
+// `welded`: weld_positions' ids and count when the caller has them.
+Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld,
+                               const std::pair<const HostVector<uint32_t>*, uint32_t>& welded = {}) {
   if (Status s = validate_surface_mesh(mesh, "mesh_topology"); !s.ok()) return s;
   MeshTopology topo;
   const size_t n = mesh.triangles.size();
@@ -119,8 +121,9 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   HostVector<uvec3> tris(mesh.triangles.begin(), mesh.triangles.end());
   size_t vertex_count = mesh.positions.size();
   if (weld) {
-    HostVector<uint32_t> id;
-    vertex_count = weld_positions(mesh.positions, id);
+    HostVector<uint32_t> own;
+    vertex_count = welded.first ? welded.second : weld_positions(mesh.positions, own);
+    const HostVector<uint32_t>& id = welded.first ? *welded.first : own;
     tbb::parallel_for(size_t(0), n, [&](size_t t) {
       for (int k = 0; k < 3; ++k) tris[t][k] = id[tris[t][k]];
     });
@@ -474,7 +477,8 @@ void for_each_narrow_near(const TriangleGrid& g, const GridBlocks& blocks, const
 }
 
 Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs,
-                                          const TriangleGrid* shared_grid = nullptr) {
+                                          const TriangleGrid* shared_grid = nullptr,
+                                          const HostVector<uint32_t>* welded_ids = nullptr) {
   if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
   count = 0;
   if (pairs) pairs->clear();
@@ -490,8 +494,9 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
 
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
   // corners by their ids.
-  HostVector<uint32_t> vertex_id;
-  weld_positions(pos, vertex_id);
+  HostVector<uint32_t> own_ids;
+  if (!welded_ids) weld_positions(pos, own_ids);
+  const HostVector<uint32_t>& vertex_id = welded_ids ? *welded_ids : own_ids;
   // Triangles in cell order, so that a cell's are adjacent in memory.
   HostVector<exact::Triangle> tri(n);
   HostVector<exact::PlaneFilter> plane(n);
@@ -955,7 +960,19 @@ Status mesh_quality_report_unguarded(const GwnModel& model, const SurfaceMesh& m
   const auto since = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
-  if (Status s = mesh_topology(mesh, out.topology, weld_equal_positions); !s.ok()) return s;
+  if (Status s = validate_surface_mesh(mesh, "mesh_quality_report"); !s.ok()) return s;
+  // One weld of the positions for the topology and the pairs (the topology beside the pairs, on
+  // two threads, took a third more memory at the peak for a few hundredths of a second).
+  HostVector<uint32_t> welded;
+  uint32_t welded_count = 0;
+  if (Status s = guard_status(
+          "mesh_topology",
+          [&] {
+            welded_count = weld_positions(mesh.positions, welded);
+            return mesh_topology_unguarded(mesh, out.topology, weld_equal_positions, {&welded, welded_count});
+          });
+      !s.ok())
+    return s;
   out.seconds_topology = since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   // One grid of the output's triangles for the pairs and the distances.
@@ -969,7 +986,7 @@ Status mesh_quality_report_unguarded(const GwnModel& model, const SurfaceMesh& m
     return s;
   if (Status s = guard_status(
           "count_self_intersections",
-          [&] { return count_self_intersections_unguarded(mesh, out.self_intersections, nullptr, &grid); });
+          [&] { return count_self_intersections_unguarded(mesh, out.self_intersections, nullptr, &grid, &welded); });
       !s.ok())
     return s;
   out.seconds_self_intersections = since(t1);

@@ -38,8 +38,11 @@ template <class V>
 GWNRT_HD GWNRT_FORCEINLINE V segment_inverse_square_integral(V p, V u_dot_v, V cross2, V length) {
   const V two = V{} + 2.0f;
   const V far = two * length / (p + u_dot_v);
-  if constexpr (sizeof(V) == sizeof(float))
+  if constexpr (sizeof(V) == sizeof(float)) {
     if (u_dot_v >= 0.0f) return far;
+  } else if (!lane_any(u_dot_v < V{})) {
+    return far;  // every lane far: the near form's three divisions and root are most of a lane's cost
+  }
   // Q without cancellation when α is near π (x beside the segment): P + u·v = |u×v|² / (P - u·v).
   const V q = cross2 / (p - u_dot_v);
   const V chord = two / q, arc = (V{} + float(kPi)) / lane_sqrt(two * p * q);
