@@ -30,6 +30,8 @@ struct DeviceTriangleTree {
     view.order2 = order2.get();
     view.vertices = vertices.get();
     view.triangle_ids = triangle_ids.get();
+    view.corner_columns = nullptr;  // host only (bvh.h)
+    view.column_stride = 0;
     return Status::Ok();
   }
 };

@@ -114,13 +114,28 @@ class MomentBuilder {
 }  // namespace
 
 TriangleTreeView TriangleTree::view() const {
+  const uint32_t count = uint32_t(triangle_ids.size());
   return {bvh.view(),
           expansion.data(),
           order1.data(),
           order2.data(),
           vertices.data(),
           triangle_ids.data(),
-          uint32_t(triangle_ids.size())};
+          count,
+          corner_columns.empty() ? nullptr : corner_columns.data(),
+          corner_columns.empty() ? 0u : count + kCornerColumnPadding};
+}
+
+void add_corner_columns(TriangleTree& tree) {
+  const size_t count = tree.triangle_ids.size(), stride = count + kCornerColumnPadding;
+  tree.corner_columns.clear();
+  if (count == 0) return;
+  tree.corner_columns.resize(9 * stride);
+  for (size_t t = 0; t < stride; ++t) {
+    const size_t from = std::min(t, count - 1);
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) tree.corner_columns[(3 * j + k) * stride + t] = tree.vertices[3 * from + j][k];
+  }
 }
 
 Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTree& out) {

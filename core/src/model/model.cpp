@@ -183,6 +183,7 @@ Status GwnModel::build_boundary() const {
   const std::vector<uint32_t> loop_of_segment = boundary_loops(boundary_, loop_count);
   const Cone cone = boundary_cone(boundary_, loop_of_segment, loop_count);
   if (Status s = build_triangle_tree(cone.mesh, options.max_leaf_triangles, cone_); !s.ok()) return s;
+  add_corner_columns(cone_);
   cone_lengths_ = gwnrt::cone_boundary_lengths(cone_, cone.segment_triangles);
   cone_segments_ = gwnrt::cone_segments(cone_, cone.segment_triangles);
   smooth_regions_ = group_smooth_regions(cone, loop_count);

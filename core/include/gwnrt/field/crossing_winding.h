@@ -193,7 +193,7 @@ struct ConeCrossingLanes {
   GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
     const vec3* v = cone.vertices + 3 * first;
     d4 g[3][3];
-    lane_triangle_corners(v, count, x, g);
+    lane_triangle_corners(cone, first, count, x, g);
     const LaneTangent<d4> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     const l4 lane{0, 1, 2, 3};
     const l4 used = lane < int64_t(count);

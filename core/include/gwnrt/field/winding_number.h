@@ -363,6 +363,16 @@ GWNRT_FORCEINLINE void lane_triangle_corners(const vec3* v, uint32_t count, cons
   for (int j = 0; j < 3; ++j)
     for (int k = 0; k < 3; ++k) g[j][k] = d4{v[j][k], v[3 * m1 + j][k], v[3 * m2 + j][k], v[3 * m3 + j][k]} - x[k];
 }
+// The same for leaf-order triangles [first, first + count) of a tree, from its corner columns
+// where it has them (one load a coordinate; lanes past count then hold the next triangles, which
+// the callers mask as they mask the repeated ones).
+GWNRT_FORCEINLINE void lane_triangle_corners(const TriangleTreeView& tree, uint32_t first, uint32_t count,
+                                             const dvec3& x, d4 g[3][3]) {
+  if (!tree.corner_columns) return lane_triangle_corners(tree.vertices + 3 * first, count, x, g);
+  const float* column = tree.corner_columns + first;
+  for (int c = 0; c < 9; ++c)
+    g[c / 3][c % 3] = d4(_mm256_cvtps_pd(_mm_loadu_ps(column))) - x[c % 3], column += tree.column_stride;
+}
 #endif
 
 // Near triangles collected until a lane vector of Width is full: corners[3 * j + k][lane] is

@@ -75,6 +75,9 @@ struct BvhView {
   uint32_t node_count = 0;
 };
 
+// Triangles past the last in each of TriangleTreeView::corner_columns.
+inline constexpr uint32_t kCornerColumnPadding = 4;
+
 // The multipole tree over the mesh triangles.
 struct TriangleTreeView {
   BvhView bvh;
@@ -84,6 +87,12 @@ struct TriangleTreeView {
   const vec3* vertices = nullptr;          // 3 per triangle, in leaf order
   const uint32_t* triangle_ids = nullptr;  // leaf order -> input triangle index
   uint32_t triangle_count = 0;
+  // The vertices again by coordinate, where the tree has them (add_corner_columns; host only, the
+  // device's view leaves them null): coordinate k of corner j of leaf-order triangle t at
+  // corner_columns[(3j + k) · column_stride + t], each column padded with copies of the last
+  // triangle, so that four triangles from any t load as one vector each.
+  const float* corner_columns = nullptr;
+  uint32_t column_stride = 0;
   // x on one of the triangles counts 0 for it (solid_angle.h, point_on_triangle): set for M's
   // tree, where w on M is the mean of its one-sided limits; not for the cone C, which is not part
   // of M and where the tracer needs the side its crossing count assumes (the mean would break the

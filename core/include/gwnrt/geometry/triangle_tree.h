@@ -20,8 +20,14 @@ struct TriangleTree {
   std::vector<WideNodeOrder2> order2;
   std::vector<vec3> vertices;          // 3 per triangle, leaf order
   std::vector<uint32_t> triangle_ids;  // leaf order -> input triangle
+  std::vector<float> corner_columns;   // empty, or TriangleTreeView::corner_columns
   TriangleTreeView view() const;
 };
+
+// Fills tree.corner_columns from its vertices: for the host's lanes over a tree whose near
+// triangles are summed four at a time in double (the cone's: gathering them from the vertices
+// was a third of the exact sweep of φ).
+void add_corner_columns(TriangleTree& tree);
 
 Status build_triangle_tree(const Mesh& mesh, uint32_t max_leaf_size, TriangleTree& out);
 // Whether a tree gets the moments of the multipole expansion, or only what distances need (the

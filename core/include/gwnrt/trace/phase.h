@@ -159,7 +159,7 @@ struct PhaseLanes : PhaseSum<WantGradient> {
   }
   GWNRT_FORCEINLINE void near_quad(uint32_t first, uint32_t count) {
     d4 g[3][3];  // apex, a, b relative to x
-    lane_triangle_corners(Base::tree.vertices + 3 * first, count, dvec3(Base::x), g);
+    lane_triangle_corners(Base::tree, first, count, dvec3(Base::x), g);
     const LaneTangent<d4> tangent = lane_solid_angle_tangent(g[0], g[1], g[2]);
     const l4 used = l4{0, 1, 2, 3} < int64_t(count);
     const d4 zero{};
