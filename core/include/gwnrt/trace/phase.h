@@ -148,6 +148,30 @@ struct PhaseLanes : PhaseSum<WantGradient> {
     far_integral += lane_select(counted, length / d2, f4{});
     far_nearest2 = lane_select(counted & (d2 < far_nearest2), d2, far_nearest2);
   }
+#if defined(__AVX2__)
+  // Two nodes' far lanes as one 8-wide vector (LaneTraversal::step_pair), far_lanes' terms.
+  f8 far_omega8{}, far_integral8{}, far_nearest2_8 = splat<f8>(kInfinity);
+  f8 far_gradient8[3] = {};
+  GWNRT_FORCEINLINE void far_lane_pair(uint32_t a, uint32_t b, i8 mask, f8 dx, f8 dy, f8 dz) {
+    const TriangleTreeView& tree = Base::tree;
+    const auto lanes = [&](auto field) { return load8(field(a), field(b)); };
+    if constexpr (WantGradient)
+      add_far_lanes_with_gradient<2>(tree, lanes, mask, dx, dy, dz, far_omega8, far_gradient8);
+    else
+      far_omega8 += lane_select(mask, expand_far_lanes<2>(tree, lanes, dx, dy, dz), f8{});
+    float box_a[kBvhWidth], box_b[kBvhWidth];
+    box_distances2<true>(tree.bvh.nodes[a], Base::x, box_a);
+    box_distances2<true>(tree.bvh.nodes[b], Base::x, box_b);
+    f8 ball = lane_sqrt(dx * dx + dy * dy + dz * dz) - load8(tree.expansion[a].radius, tree.expansion[b].radius);
+    ball = lane_select(ball > 0.0f, ball, f8{});
+    const f8 box = load8(box_a, box_b);
+    const f8 d2 = lane_select(ball * ball > box, ball * ball, box);
+    const f8 length = load8(Base::lengths[a].length, Base::lengths[b].length);
+    const auto counted = mask & (length > 0.0f);
+    far_integral8 += lane_select(counted, length / d2, f8{});
+    far_nearest2_8 = lane_select(counted & (d2 < far_nearest2_8), d2, far_nearest2_8);
+  }
+#endif
 #if defined(__AVX__)
   UnwrappedAngleSumT<d4, l4> near_angles{};
   d4 near_integral{}, near_nearest2 = d4{} + kInfinity;
@@ -194,6 +218,13 @@ struct PhaseLanes : PhaseSum<WantGradient> {
     Base::far_field.omega += lane_sum(far_omega);
     Base::integral += lane_sum(far_integral);
     for (int l = 0; l < 4; ++l) Base::nearest2 = min_of(Base::nearest2, far_nearest2[l]);
+#if defined(__AVX2__)
+    Base::far_field.omega += lane_sum(far_omega8);
+    Base::integral += lane_sum(far_integral8);
+    for (int l = 0; l < 8; ++l) Base::nearest2 = min_of(Base::nearest2, far_nearest2_8[l]);
+    if constexpr (WantGradient)
+      for (int k = 0; k < 3; ++k) Base::far_field.gradient[k] += lane_sum(far_gradient8[k]);
+#endif
 #if defined(__AVX__)
     if constexpr (!WantGradient) {
       Base::integral += float(near_integral[0] + near_integral[1] + near_integral[2] + near_integral[3]);
