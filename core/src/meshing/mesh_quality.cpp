@@ -55,8 +55,13 @@ Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
 }
 
 // Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get the id of their
-// group in lexicographic order. Returns the number of distinct positions.
-uint32_t weld_positions(const std::vector<vec3>& pos, HostVector<uint32_t>& id) {
+// group in lexicographic order; count is the number of distinct positions.
+struct WeldedPositions {
+  HostVector<uint32_t> id;
+  uint32_t count = 0;
+};
+void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
+  HostVector<uint32_t>& id = out.id;
   HostVector<uint32_t> order(pos.size());
   for (size_t i = 0; i < pos.size(); ++i) order[i] = uint32_t(i);
   auto less = [&](uint32_t a, uint32_t b) {
@@ -73,7 +78,7 @@ uint32_t weld_positions(const std::vector<vec3>& pos, HostVector<uint32_t>& id) 
     if (k > 0 && pos[order[k]] != pos[order[k - 1]]) ++next;
     id[order[k]] = next;
   }
-  return order.empty() ? 0 : next + 1;
+  out.count = order.empty() ? 0 : next + 1;
 }
 
 // One side of a triangle's edge: the undirected key (smaller id in the high half) and the
@@ -111,9 +116,9 @@ void sort_half_edges(HostVector<HalfEdge>& edges, size_t vertex_count) {
   });
 }
 
-// `welded`: weld_positions' ids and count when the caller has them.
+// `welded`: weld_positions' result when the caller has it.
 Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool weld,
-                               const std::pair<const HostVector<uint32_t>*, uint32_t>& welded = {}) {
+                               const WeldedPositions* welded = nullptr) {
   if (Status s = validate_surface_mesh(mesh, "mesh_topology"); !s.ok()) return s;
   MeshTopology topo;
   const size_t n = mesh.triangles.size();
@@ -121,9 +126,11 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   HostVector<uvec3> tris(mesh.triangles.begin(), mesh.triangles.end());
   size_t vertex_count = mesh.positions.size();
   if (weld) {
-    HostVector<uint32_t> own;
-    vertex_count = welded.first ? welded.second : weld_positions(mesh.positions, own);
-    const HostVector<uint32_t>& id = welded.first ? *welded.first : own;
+    WeldedPositions own;
+    if (!welded) weld_positions(mesh.positions, own);
+    const WeldedPositions& w = welded ? *welded : own;
+    vertex_count = w.count;
+    const HostVector<uint32_t>& id = w.id;
     tbb::parallel_for(size_t(0), n, [&](size_t t) {
       for (int k = 0; k < 3; ++k) tris[t][k] = id[tris[t][k]];
     });
@@ -478,7 +485,7 @@ void for_each_narrow_near(const TriangleGrid& g, const GridBlocks& blocks, const
 
 Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& count, std::vector<glm::uvec2>* pairs,
                                           const TriangleGrid* shared_grid = nullptr,
-                                          const HostVector<uint32_t>* welded_ids = nullptr) {
+                                          const WeldedPositions* welded = nullptr) {
   if (Status s = validate_surface_mesh(mesh, "count_self_intersections"); !s.ok()) return s;
   count = 0;
   if (pairs) pairs->clear();
@@ -494,9 +501,9 @@ Status count_self_intersections_unguarded(const SurfaceMesh& mesh, uint64_t& cou
 
   // Corners by position (a soup's copies of a vertex are one), so that a pair matches its shared
   // corners by their ids.
-  HostVector<uint32_t> own_ids;
-  if (!welded_ids) weld_positions(pos, own_ids);
-  const HostVector<uint32_t>& vertex_id = welded_ids ? *welded_ids : own_ids;
+  WeldedPositions own;
+  if (!welded) weld_positions(pos, own);
+  const HostVector<uint32_t>& vertex_id = (welded ? *welded : own).id;
   // Triangles in cell order, so that a cell's are adjacent in memory.
   HostVector<exact::Triangle> tri(n);
   HostVector<exact::PlaneFilter> plane(n);
@@ -814,6 +821,11 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
     if (Status s = build_triangle_tree(output, wide, 4, wide_tree, TreeMoments::kWithout); !s.ok()) return s;
   }
   const TriangleTreeView wide_view = wide_tree.view();
+  // fn(output triangle) for every wide triangle whose box lies within r of x (searched in float,
+  // widened past its round-off).
+  const auto each_wide_near = [&](const vec3& x, double r, auto&& fn) {
+    for_each_near(wide_view, x, float(r) * (1 + 1e-6f), [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
+  };
   const auto closest = [&](uint32_t t, const dvec3& xd) {
     const uvec3 v = mesh.triangles[t];
     return closest_point_on_triangle(dvec3(pos[v[0]]), dvec3(pos[v[1]]), dvec3(pos[v[2]]), xd);
@@ -863,9 +875,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
         for (size_t i = first; i < runs.size(); ++i)
           for (uint32_t j = grid.run_begin[size_t(runs[i])]; j < grid.run_begin[size_t(runs[i]) + 1]; ++j)
             if (box_within(grid.box[j], xd, reach())) fn(grid.input[j]);
-        if (wide_reach >= 0.0)
-          for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
-                        [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
+        if (wide_reach >= 0.0) each_wide_near(x, wide_reach, fn);
       };
       const auto each_near = [&](auto&& reach, double wide_reach, auto&& fn) {
         each_near_from(0, reach, wide_reach, fn);
@@ -898,8 +908,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
         continue;
       }
       // The wide triangles as near as the narrow ones' nearest, or nearer.
-      for_each_near(wide_view, x, float(best + 2 * tie) * (1 + 1e-6f),
-                    [&](uint32_t i) { nearer(wide_view.triangle_ids[i]); });
+      each_wide_near(x, best + 2 * tie, nearer);
       measure(xd, dvec3(surface_points[k].normal), each_near, best, from_surface[k], deviation[k]);
     }
   });
@@ -918,8 +927,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
             const auto nearer = [&](uint32_t t) { best = std::min(best, glm::length(closest(t, xd).point - xd)); };
             for_each_narrow_near(
                 grid, blocks, x, [&] { return best; }, [&](uint32_t j) { nearer(grid.input[j]); });
-            for_each_near(wide_view, x, float(best + 2 * tie) * (1 + 1e-6f),
-                          [&](uint32_t i) { nearer(wide_view.triangle_ids[i]); });
+            each_wide_near(x, best + 2 * tie, nearer);
             if (!(best < std::numeric_limits<double>::infinity())) {  // no output triangle of non-zero area
               from_surface[k] = std::numeric_limits<double>::infinity();
               deviation[k] = -1;  // no output: no normal to compare
@@ -927,8 +935,7 @@ Status surface_distances_unguarded(const GwnModel& model, const SurfaceMesh& mes
             }
             const auto each_near = [&](auto&& reach, double wide_reach, auto&& fn) {
               for_each_narrow_near(grid, blocks, x, reach, [&](uint32_t j) { fn(grid.input[j]); });
-              for_each_near(wide_view, x, float(wide_reach) * (1 + 1e-6f),
-                            [&](uint32_t i) { fn(wide_view.triangle_ids[i]); });
+              each_wide_near(x, wide_reach, fn);
             };
             measure(xd, dvec3(surface_points[k].normal), each_near, best, from_surface[k], deviation[k]);
           }
@@ -963,14 +970,12 @@ Status mesh_quality_report_unguarded(const GwnModel& model, const SurfaceMesh& m
   if (Status s = validate_surface_mesh(mesh, "mesh_quality_report"); !s.ok()) return s;
   // One weld of the positions for the topology and the pairs (the topology beside the pairs, on
   // two threads, took a third more memory at the peak for a few hundredths of a second).
-  HostVector<uint32_t> welded;
-  uint32_t welded_count = 0;
-  if (Status s = guard_status(
-          "mesh_topology",
-          [&] {
-            welded_count = weld_positions(mesh.positions, welded);
-            return mesh_topology_unguarded(mesh, out.topology, weld_equal_positions, {&welded, welded_count});
-          });
+  WeldedPositions welded;
+  if (Status s = guard_status("mesh_topology",
+                              [&] {
+                                weld_positions(mesh.positions, welded);
+                                return mesh_topology_unguarded(mesh, out.topology, weld_equal_positions, &welded);
+                              });
       !s.ok())
     return s;
   out.seconds_topology = since(t0);

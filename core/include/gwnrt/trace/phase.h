@@ -129,47 +129,41 @@ struct PhaseLanes : PhaseSum<WantGradient> {
   f4 far_omega{}, far_integral{}, far_nearest2 = splat<f4>(kInfinity);
   f4 far_gradient[3] = {};
 
-  GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
+  // A node's far lanes (f4), or a pair's (f8): their expansion and, as PhaseSum::far, their share
+  // of the bound from the larger of the distances to the cluster's ball and to its box (box2).
+  template <class V, class M, class Lanes>
+  GWNRT_FORCEINLINE void add_far(Lanes lanes, M mask, V dx, V dy, V dz, V box2, V& omega, V (&gradient)[3], V& integral,
+                                 V& nearest2) {
     const TriangleTreeView& tree = Base::tree;
     if constexpr (WantGradient)
-      add_far_lanes_with_gradient<2>(
-          tree, [&](auto field) { return load4(field(node)); }, mask, dx, dy, dz, far_omega, far_gradient);
+      add_far_lanes_with_gradient<2>(tree, lanes, mask, dx, dy, dz, omega, gradient);
     else
-      far_omega += lane_select(mask, far_lanes_omega<2>(tree, node, dx, dy, dz), f4{});
-    // As PhaseSum::far: the larger of the distances to the cluster's ball and to its box.
-    float box2[kBvhWidth];
-    box_distances2<true>(tree.bvh.nodes[node], Base::x, box2);
-    f4 ball = lane_sqrt(dx * dx + dy * dy + dz * dz) - load4(tree.expansion[node].radius);
-    ball = lane_select(ball > 0.0f, ball, f4{});
-    const f4 box = load4(box2);
-    const f4 d2 = lane_select(ball * ball > box, ball * ball, box);
-    const f4 length = load4(Base::lengths[node].length);
+      omega += lane_select(mask, expand_far_lanes<2>(tree, lanes, dx, dy, dz), V{});
+    V ball = lane_sqrt(dx * dx + dy * dy + dz * dz) - lanes([&](uint32_t i) { return tree.expansion[i].radius; });
+    ball = lane_select(ball > 0.0f, ball, V{});
+    const V d2 = lane_select(ball * ball > box2, ball * ball, box2);
+    const V length = lanes([&](uint32_t i) { return Base::lengths[i].length; });
     const auto counted = mask & (length > 0.0f);
-    far_integral += lane_select(counted, length / d2, f4{});
-    far_nearest2 = lane_select(counted & (d2 < far_nearest2), d2, far_nearest2);
+    integral += lane_select(counted, length / d2, V{});
+    nearest2 = lane_select(counted & (d2 < nearest2), d2, nearest2);
+  }
+
+  GWNRT_FORCEINLINE void far_lanes(uint32_t node, i4 mask, f4 dx, f4 dy, f4 dz) {
+    float box2[kBvhWidth];
+    box_distances2<true>(Base::tree.bvh.nodes[node], Base::x, box2);
+    add_far([&](auto field) { return load4(field(node)); }, mask, dx, dy, dz, load4(box2), far_omega, far_gradient,
+            far_integral, far_nearest2);
   }
 #if defined(__AVX2__)
-  // Two nodes' far lanes as one 8-wide vector (LaneTraversal::step_pair), far_lanes' terms.
+  // Two nodes' far lanes as one 8-wide vector (LaneTraversal::step_pair).
   f8 far_omega8{}, far_integral8{}, far_nearest2_8 = splat<f8>(kInfinity);
   f8 far_gradient8[3] = {};
   GWNRT_FORCEINLINE void far_lane_pair(uint32_t a, uint32_t b, i8 mask, f8 dx, f8 dy, f8 dz) {
-    const TriangleTreeView& tree = Base::tree;
-    const auto lanes = [&](auto field) { return load8(field(a), field(b)); };
-    if constexpr (WantGradient)
-      add_far_lanes_with_gradient<2>(tree, lanes, mask, dx, dy, dz, far_omega8, far_gradient8);
-    else
-      far_omega8 += lane_select(mask, expand_far_lanes<2>(tree, lanes, dx, dy, dz), f8{});
     float box_a[kBvhWidth], box_b[kBvhWidth];
-    box_distances2<true>(tree.bvh.nodes[a], Base::x, box_a);
-    box_distances2<true>(tree.bvh.nodes[b], Base::x, box_b);
-    f8 ball = lane_sqrt(dx * dx + dy * dy + dz * dz) - load8(tree.expansion[a].radius, tree.expansion[b].radius);
-    ball = lane_select(ball > 0.0f, ball, f8{});
-    const f8 box = load8(box_a, box_b);
-    const f8 d2 = lane_select(ball * ball > box, ball * ball, box);
-    const f8 length = load8(Base::lengths[a].length, Base::lengths[b].length);
-    const auto counted = mask & (length > 0.0f);
-    far_integral8 += lane_select(counted, length / d2, f8{});
-    far_nearest2_8 = lane_select(counted & (d2 < far_nearest2_8), d2, far_nearest2_8);
+    box_distances2<true>(Base::tree.bvh.nodes[a], Base::x, box_a);
+    box_distances2<true>(Base::tree.bvh.nodes[b], Base::x, box_b);
+    add_far([&](auto field) { return load8(field(a), field(b)); }, mask, dx, dy, dz, load8(box_a, box_b), far_omega8,
+            far_gradient8, far_integral8, far_nearest2_8);
   }
 #endif
 #if defined(__AVX__)
