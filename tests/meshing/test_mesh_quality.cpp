@@ -4,10 +4,12 @@
 #include "gwnrt/meshing/mesh_quality.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -178,6 +180,138 @@ TEST(MeshQualityTopology, DegenerateTrianglesAreCounted) {
   EXPECT_EQ(t.boundary_edges, 2u);      // (1, 4) and (4, 0)
   EXPECT_FALSE(t.closed_manifold());
   EXPECT_EQ(intersections(m), 0u);  // zero-area triangles are left out
+}
+
+// Every count of mesh_topology by definition, the slow way: edges in a map, fans and components
+// by breadth-first search, zero area by an exact cross product (the test's coordinates are small
+// integers), equal positions by value.
+MeshTopology reference_topology(const SurfaceMesh& m, bool weld) {
+  MeshTopology out;
+  out.triangles = m.triangles.size();
+  std::vector<uint32_t> id(m.positions.size());
+  std::map<std::array<float, 3>, uint32_t> distinct;
+  for (size_t i = 0; i < id.size(); ++i) {
+    const vec3 p = m.positions[i] + vec3(0.0f);  // -0.0 is 0.0
+    id[i] = weld ? distinct.try_emplace({p.x, p.y, p.z}, uint32_t(distinct.size())).first->second : uint32_t(i);
+  }
+  const size_t vertices = weld ? distinct.size() : m.positions.size();
+  out.vertices = vertices;
+  std::vector<std::array<uint32_t, 3>> tris;  // the triangles with three distinct ids
+  std::vector<size_t> proper;                 // their input indices
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const uvec3& o = m.triangles[t];
+    const std::array<uint32_t, 3> v = {id[o[0]], id[o[1]], id[o[2]]};
+    const dvec3 a(m.positions[o[0]]), b(m.positions[o[1]]), c(m.positions[o[2]]);
+    const bool repeated = v[0] == v[1] || v[1] == v[2] || v[2] == v[0];
+    if (repeated || glm::cross(b - a, c - a) == dvec3(0.0)) ++out.degenerate_triangles;
+    if (repeated) continue;
+    tris.push_back(v);
+    proper.push_back(t);
+  }
+  std::map<std::pair<uint32_t, uint32_t>, std::vector<std::pair<size_t, bool>>> edges;  // (triangle, runs low -> high)
+  std::vector<std::vector<size_t>> at_vertex(vertices);
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
+      edges[{std::min(a, b), std::max(a, b)}].push_back({t, a < b});
+      at_vertex[a].push_back(t);
+    }
+  std::vector<std::vector<size_t>> neighbours(tris.size());
+  for (const auto& [key, on] : edges) {
+    if (on.size() == 1) ++out.boundary_edges;
+    if (on.size() > 2) ++out.non_manifold_edges;
+    if (on.size() == 2 && on[0].second == on[1].second) ++out.inconsistent_edges;
+    for (const auto& [t, dir] : on)
+      for (const auto& [u, dir2] : on)
+        if (t != u) neighbours[t].push_back(u);
+  }
+  std::vector<bool> seen(tris.size(), false);
+  for (size_t t = 0; t < tris.size(); ++t) {
+    if (seen[t]) continue;
+    ++out.components;
+    std::vector<size_t> stack = {t};
+    seen[t] = true;
+    while (!stack.empty()) {
+      const size_t s = stack.back();
+      stack.pop_back();
+      for (size_t u : neighbours[s])
+        if (!seen[u]) {
+          seen[u] = true;
+          stack.push_back(u);
+        }
+    }
+  }
+  // Around v two triangles are in one fan when both hold an edge {v, u}.
+  auto holds_edge = [&](size_t t, uint32_t v, uint32_t u) {
+    const auto& x = tris[t];
+    return std::count(x.begin(), x.end(), v) == 1 && std::count(x.begin(), x.end(), u) == 1;
+  };
+  for (uint32_t v = 0; v < vertices; ++v) {
+    const std::vector<size_t>& around = at_vertex[v];
+    if (around.empty()) {
+      ++out.unreferenced_vertices;
+      continue;
+    }
+    std::vector<bool> reached(around.size(), false);
+    std::vector<size_t> stack = {0};
+    reached[0] = true;
+    while (!stack.empty()) {
+      const size_t i = stack.back();
+      stack.pop_back();
+      for (size_t j = 0; j < around.size(); ++j) {
+        if (reached[j]) continue;
+        for (const uint32_t u : tris[around[i]])
+          if (u != v && holds_edge(around[j], v, u)) {
+            reached[j] = true;
+            stack.push_back(j);
+            break;
+          }
+      }
+    }
+    if (std::find(reached.begin(), reached.end(), false) != reached.end()) ++out.non_manifold_vertices;
+  }
+  return out;
+}
+
+TEST(MeshQualityTopology, AgreesWithTheDefinitionOnRandomDefects) {
+  test::Random random(7);
+  // A closed sphere with holes punched, triangles flipped and repeated, stray and collinear
+  // triangles, and some vertices split off at their positions (soups and seams); large enough
+  // that the threads share the work.
+  const SurfaceMesh sphere = to_surface(test::make_sphere(5));
+  for (int trial = 0; trial < 12; ++trial) {
+    SurfaceMesh m;
+    for (const vec3& p : sphere.positions) m.positions.push_back(glm::round(p * 1024.0f));
+    for (const uvec3& t : sphere.triangles) {
+      const uint32_t roll = random.index(40);
+      if (roll == 0) continue;  // a hole
+      m.triangles.push_back(roll == 1 ? uvec3(t[0], t[2], t[1]) : t);
+      if (roll == 2) m.triangles.push_back(t);  // the same triangle twice: a non-manifold edge
+    }
+    const uint32_t n = uint32_t(m.positions.size());
+    auto any = [&] { return uint32_t(random.index(int(n))); };
+    for (int extra = 0; extra < 50; ++extra) m.triangles.push_back({any(), any(), any()});  // strays, repeats too
+    m.positions.push_back(m.positions[0] * 2.0f - m.positions[1]);  // on the line through 0 and 1
+    m.triangles.push_back({0, 1, n});
+    m.positions.push_back(vec3(-0.0f, 0.0f, 0.0f));
+    m.positions.push_back(vec3(0.0f, -0.0f, 0.0f));  // one position, two vertices
+    m.triangles.push_back({n + 1, 0, 1});
+    m.triangles.push_back({n + 2, 1, 0});
+    m.positions.push_back(vec3(4096.0f));  // unreferenced
+    for (uvec3& t : m.triangles)
+      for (int k = 0; k < 3; ++k)
+        if (random.index(20) == 0) {  // split off
+          m.positions.push_back(m.positions[t[k]]);
+          t[k] = uint32_t(m.positions.size() - 1);
+        }
+    ASSERT_GT(m.positions.size(), 10000u);
+    for (const bool weld : {false, true}) {
+      const MeshTopology got = topology(m, weld), want = reference_topology(m, weld);
+      EXPECT_EQ(got, want) << "trial " << trial << (weld ? " welded" : "");
+      EXPECT_GT(want.boundary_edges * want.non_manifold_edges * want.inconsistent_edges, 0u);
+      EXPECT_GT(want.degenerate_triangles * want.non_manifold_vertices * want.unreferenced_vertices, 0u);
+    }
+  }
 }
 
 TEST(MeshQualityTopology, EmptyAndBadInput) {

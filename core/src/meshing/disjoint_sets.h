@@ -2,10 +2,13 @@
 // the attribute transfer's UV charts).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include "gwnrt/base/host_blocks.h"
 
 namespace gwnrt {
 
@@ -33,6 +36,40 @@ class DisjointSets {
 
  private:
   std::vector<uint32_t> parent_;
+};
+
+// The same for unions from many threads at once: a root is linked under a smaller one by
+// compare-and-swap (so no cycle can form and the sets do not depend on the threads' order), and
+// finds halve paths by compare-and-swap too, which only ever points an id at an ancestor.
+class ConcurrentDisjointSets {
+ public:
+  explicit ConcurrentDisjointSets(size_t n) : parent_(n) {
+    for (size_t i = 0; i < n; ++i) parent_[i] = uint32_t(i);
+  }
+  uint32_t find(uint32_t x) {
+    for (;;) {
+      uint32_t p = at(x).load(std::memory_order_relaxed);
+      if (p == x) return x;
+      const uint32_t g = at(p).load(std::memory_order_relaxed);
+      if (g == p) return p;
+      at(x).compare_exchange_weak(p, g, std::memory_order_relaxed);
+      x = g;
+    }
+  }
+  void unite(uint32_t a, uint32_t b) {
+    for (;;) {  // each failed swap means another thread linked the root first
+      a = find(a);
+      b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      uint32_t root = a;
+      if (at(a).compare_exchange_strong(root, b, std::memory_order_relaxed)) return;
+    }
+  }
+
+ private:
+  std::atomic_ref<uint32_t> at(uint32_t x) { return std::atomic_ref<uint32_t>(parent_[x]); }
+  HostVector<uint32_t> parent_;
 };
 
 }  // namespace gwnrt

@@ -1,13 +1,16 @@
-// The mesh quality report (gwnrt/meshing/mesh_quality.h): topology by sorted undirected edges and
-// union-find, self-intersections by a grid of cells over the triangles and the exact pair test
-// (exact_predicates.cpp), distances to S by the model's signed distance one way and the tracer's
+// The mesh quality report (gwnrt/meshing/mesh_quality.h): topology from the corners around each
+// vertex and a concurrent union-find, self-intersections by a grid of cells over the triangles
+// and the exact pair test (exact_predicates.cpp), distances to S by the model's signed distance one way and the tracer's
 // hits and the same grid over the output the other.
 #include "gwnrt/meshing/mesh_quality.h"
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -17,6 +20,7 @@
 #include <tbb/combinable.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include "base/message.h"
@@ -54,40 +58,62 @@ Status validate_surface_mesh(const SurfaceMesh& mesh, const char* where) {
   return Status::Ok();
 }
 
-// Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get the id of their
-// group in lexicographic order; count is the number of distinct positions.
+// Vertex ids after welding: equal positions (by value, so 0.0 == -0.0) get one id, numbered in
+// the order of their first vertex; count is the number of distinct positions.
 struct WeldedPositions {
   HostVector<uint32_t> id;
   uint32_t count = 0;
 };
-void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
-  HostVector<uint32_t>& id = out.id;
-  HostVector<uint32_t> order(pos.size());
-  for (size_t i = 0; i < pos.size(); ++i) order[i] = uint32_t(i);
-  auto less = [&](uint32_t a, uint32_t b) {
-    const vec3 &p = pos[a], &q = pos[b];
-    if (p.x != q.x) return p.x < q.x;
-    if (p.y != q.y) return p.y < q.y;
-    if (p.z != q.z) return p.z < q.z;
-    return a < b;
-  };
-  tbb::parallel_sort(order.begin(), order.end(), less);
-  id.assign(pos.size(), 0);
-  uint32_t next = 0;
-  for (size_t k = 0; k < order.size(); ++k) {
-    if (k > 0 && pos[order[k]] != pos[order[k - 1]]) ++next;
-    id[order[k]] = next;
+
+// Equal positions hash equally: -0.0 is read as 0.0 (the coordinates are finite).
+inline uint64_t position_hash(const vec3& p) {
+  uint64_t h = 0x9e3779b97f4a7c15ull;
+  for (const float c : {p.x, p.y, p.z}) {
+    uint32_t bits;
+    const float plus = c + 0.0f;
+    std::memcpy(&bits, &plus, sizeof bits);
+    h = (h ^ bits) * 0xff51afd7ed558ccdull;
+    h ^= h >> 32;
   }
-  out.count = order.empty() ? 0 : next + 1;
+  return h;
 }
 
-// One side of a triangle's edge: the undirected key (smaller id in the high half) and the
-// corner the edge leaves from (3t + k: from corner k to corner k + 1 of triangle t).
-struct HalfEdge {
-  uint64_t key;
-  uint32_t corner;
-  bool operator<(const HalfEdge& o) const { return key != o.key ? key < o.key : corner < o.corner; }
-};
+// By an open-addressing table of the vertices, filled in parallel: a slot holds the smallest
+// vertex at its position (a sort of the positions cost four times as much).
+void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
+  const size_t n = pos.size();
+  constexpr uint32_t kEmpty = ~uint32_t(0);
+  size_t size = 16;
+  while (size < 2 * n) size *= 2;  // at most half full: a probe ends within a few slots
+  const size_t mask = size - 1;
+  HostVector<uint32_t> table(size, kEmpty), slot_of(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      size_t slot = position_hash(pos[i]) & mask;
+      for (size_t probe = 0; probe < size; ++probe, slot = (slot + 1) & mask) {
+        std::atomic_ref<uint32_t> entry(table[slot]);
+        uint32_t held = entry.load(std::memory_order_relaxed);
+        if (held == kEmpty && entry.compare_exchange_strong(held, uint32_t(i), std::memory_order_relaxed)) break;
+        if (pos[held] != pos[i]) continue;  // held: the slot's vertex, whether found or just set by another thread
+        while (i < held && !entry.compare_exchange_weak(held, uint32_t(i), std::memory_order_relaxed)) {
+        }
+        break;
+      }
+      slot_of[i] = uint32_t(slot);
+    }
+  });
+  // A position's first vertex numbers it; the others take its number.
+  HostVector<uint32_t>& id = out.id;
+  id.resize(n);
+  uint32_t next = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (table[slot_of[i]] == i) id[i] = next++;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      if (const uint32_t first = table[slot_of[i]]; first != i) id[i] = id[first];
+  });
+  out.count = next;
+}
 
 // `items` reordered by bucket_of(item), in [0, buckets), keeping their order within a bucket: by
 // counting, O(n + buckets). Returns where each bucket starts (buckets + 1 entries).
@@ -101,19 +127,6 @@ HostVector<uint32_t> order_by_bucket(HostVector<T>& items, size_t buckets, Bucke
   for (const T& x : items) ordered[next[bucket_of(x)]++] = x;
   items.swap(ordered);
   return start;
-}
-
-// The half-edges in (key, corner) order, as a comparison sort leaves them: bucketed by their
-// smaller vertex (the key's high half; ~0, the left-out ones, last) in corner order, then each
-// bucket (a vertex's few edges) sorted on its own. O(n + vertices).
-void sort_half_edges(HostVector<HalfEdge>& edges, size_t vertex_count) {
-  const HostVector<uint32_t> start = order_by_bucket(edges, vertex_count + 1, [&](const HalfEdge& e) {
-    return e.key == ~uint64_t(0) ? vertex_count : size_t(e.key >> 32);
-  });
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, vertex_count, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v != r.end(); ++v)
-      std::sort(edges.begin() + ptrdiff_t(start[v]), edges.begin() + ptrdiff_t(start[v + 1]));
-  });
 }
 
 // `welded`: weld_positions' result when the caller has it.
@@ -150,75 +163,100 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
     }
   });
 
-  HostVector<uint8_t> used(vertex_count, 0);
-  HostVector<HalfEdge> edges(3 * n);
-  size_t valid = 0;
-  for (size_t t = 0; t < n; ++t) {
-    if (kind[t] != 0) ++topo.degenerate_triangles;
-    if (kind[t] == 2) continue;
-    ++valid;
-  }
-  // Half-edges of the triangles that have three distinct vertices, packed in triangle order;
-  // triangles with a repeated index get the key ~0 (sorted last, dropped).
+  for (size_t t = 0; t < n; ++t) topo.degenerate_triangles += kind[t] != 0 ? 1 : 0;
+
+  // The corners at each vertex (of the triangles with three distinct vertices), grouped by
+  // vertex: everything below but the components is local to one vertex.
+  HostVector<uint32_t> start(vertex_count + 1, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
-        const uint64_t key = kind[t] == 2 ? ~uint64_t(0) : (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-        edges[3 * t + k] = {key, uint32_t(3 * t + k)};
-      }
+      if (kind[t] != 2)
+        for (int k = 0; k < 3; ++k)
+          std::atomic_ref<uint32_t>(start[tris[t][k] + 1]).fetch_add(1, std::memory_order_relaxed);
   });
-  sort_half_edges(edges, vertex_count);
-  edges.resize(3 * valid);
-  for (size_t t = 0; t < n; ++t)
-    if (kind[t] != 2)
-      for (int k = 0; k < 3; ++k) used[tris[t][k]] = 1;
-  for (size_t v = 0; v < vertex_count; ++v) topo.unreferenced_vertices += used[v] ? 0 : 1;
+  for (size_t v = 1; v <= vertex_count; ++v) start[v] += start[v - 1];
+  HostVector<uint32_t> corners(start[vertex_count]);
+  {
+    HostVector<uint32_t> next(start.begin(), start.end() - 1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t t = r.begin(); t != r.end(); ++t)
+        if (kind[t] != 2)
+          for (int k = 0; k < 3; ++k)
+            corners[std::atomic_ref<uint32_t>(next[tris[t][k]]).fetch_add(1, std::memory_order_relaxed)] =
+                uint32_t(3 * t + k);
+    });
+  }
 
-  auto start_vertex = [&](uint32_t corner) { return tris[corner / 3][corner % 3]; };
-  auto end_corner = [](uint32_t corner) { return corner - corner % 3 + (corner % 3 + 1) % 3; };
-  // The corner of a half-edge's triangle at vertex v (one of the edge's two ends).
-  auto corner_at = [&](uint32_t corner, uint32_t v) { return start_vertex(corner) == v ? corner : end_corner(corner); };
-  DisjointSets triangle_sets(n), corner_sets(3 * n);
-  for (size_t g = 0; g < edges.size();) {
-    size_t e = g + 1;
-    while (e < edges.size() && edges[e].key == edges[g].key) ++e;
-    const size_t count = e - g;
-    const uint32_t c0 = edges[g].corner;
-    if (count == 1) {
-      ++topo.boundary_edges;
-    } else {
-      if (count > 2)
-        ++topo.non_manifold_edges;
-      else if (start_vertex(c0) == start_vertex(edges[g + 1].corner))
-        ++topo.inconsistent_edges;
-      // The triangles on one edge are one component, and around each end of the edge their
-      // corners are one fan.
-      const uint32_t u = uint32_t(edges[g].key >> 32), w = uint32_t(edges[g].key);
-      for (size_t m = g + 1; m < e; ++m) {
-        const uint32_t cm = edges[m].corner;
-        triangle_sets.unite(c0 / 3, cm / 3);
-        corner_sets.unite(corner_at(c0, u), corner_at(cm, u));
-        corner_sets.unite(corner_at(c0, w), corner_at(cm, w));
+  // Around vertex v each edge {v, u} is one group of the corners' neighbours u: its size is the
+  // edge's count of triangles (counted at its smaller end), the corners in it are one fan, and
+  // the triangles of an edge with two or more are one component.
+  struct Counts {
+    uint64_t boundary = 0, non_manifold = 0, inconsistent = 0, non_manifold_vertices = 0, unreferenced = 0;
+  };
+  struct Neighbour {
+    uint32_t vertex, corner;  // corner: its index among v's corners
+    bool leaving;             // the corner's triangle runs v -> vertex
+    bool operator<(const Neighbour& o) const { return vertex < o.vertex; }
+  };
+  ConcurrentDisjointSets components(n);
+  tbb::enumerable_thread_specific<Counts> counts;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, vertex_count, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    Counts& c = counts.local();
+    std::vector<Neighbour> around;
+    std::vector<uint32_t> fan;
+    for (size_t v = r.begin(); v != r.end(); ++v) {
+      const uint32_t first = start[v], count = start[v + 1] - first;
+      if (count == 0) {
+        ++c.unreferenced;
+        continue;
       }
-    }
-    g = e;
-  }
-  // A fan is a set of corners at one vertex (unions only join corners of the same vertex): a
-  // vertex with corners in two sets has two fans.
-  HostVector<uint8_t> fans(vertex_count, 0);
-  for (size_t t = 0; t < n; ++t) {
-    if (kind[t] == 2) continue;
-    if (triangle_sets.find(uint32_t(t)) == t) ++topo.components;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t c = uint32_t(3 * t + k);
-      if (corner_sets.find(c) == c) {
-        uint8_t& f = fans[tris[t][k]];
-        if (f < 2) ++f;
+      around.clear();
+      fan.resize(count);
+      for (uint32_t j = 0; j < count; ++j) {
+        const uint32_t corner = corners[first + j], t = corner / 3, k = corner % 3;
+        around.push_back({tris[t][(k + 1) % 3], j, true});
+        around.push_back({tris[t][(k + 2) % 3], j, false});
+        fan[j] = j;
       }
+      std::sort(around.begin(), around.end());
+      auto fan_root = [&](uint32_t j) {
+        while (fan[j] != j) j = fan[j] = fan[fan[j]];
+        return j;
+      };
+      for (size_t g = 0; g < around.size();) {
+        size_t e = g + 1;
+        while (e < around.size() && around[e].vertex == around[g].vertex) ++e;
+        for (size_t m = g + 1; m < e; ++m) fan[fan_root(around[m].corner)] = fan_root(around[g].corner);
+        if (around[g].vertex > v) {
+          const size_t on_edge = e - g;
+          if (on_edge == 1) ++c.boundary;
+          if (on_edge > 2) ++c.non_manifold;
+          if (on_edge == 2 && around[g].leaving == around[g + 1].leaving) ++c.inconsistent;
+          for (size_t m = g + 1; m < e; ++m)
+            components.unite(corners[first + around[g].corner] / 3, corners[first + around[m].corner] / 3);
+        }
+        g = e;
+      }
+      uint32_t fans = 0;
+      for (uint32_t j = 0; j < count; ++j) fans += fan[j] == j ? 1 : 0;
+      if (fans > 1) ++c.non_manifold_vertices;
     }
-  }
-  for (size_t v = 0; v < vertex_count; ++v) topo.non_manifold_vertices += fans[v] > 1 ? 1 : 0;
+  });
+  counts.combine_each([&](const Counts& c) {
+    topo.boundary_edges += c.boundary;
+    topo.non_manifold_edges += c.non_manifold;
+    topo.inconsistent_edges += c.inconsistent;
+    topo.non_manifold_vertices += c.non_manifold_vertices;
+    topo.unreferenced_vertices += c.unreferenced;
+  });
+  topo.components = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 4096), uint64_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint64_t roots) {
+        for (size_t t = r.begin(); t != r.end(); ++t)
+          roots += kind[t] != 2 && components.find(uint32_t(t)) == t ? 1 : 0;
+        return roots;
+      },
+      std::plus<>());
   out = topo;
   return Status::Ok();
 }
