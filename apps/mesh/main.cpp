@@ -175,7 +175,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
   app.add_flag("--report", report,
-               "Print a quality report: topology, self-intersections, distances to S, time per pass, memory");
+               "Print a quality report: topology, self-intersections, distances to S (from samples that follow "
+               "the output's size), time per pass, memory");
   app.add_option("--report-json", report_json_path, "Write the quality report as JSON to this file");
   app.add_flag("-v,--verbose", verbose,
                "Print the summary even when stderr is not a terminal, and what welding by position changed");
@@ -271,7 +272,7 @@ int main(int argc, char** argv) {
   }
   if (report || !report_json_path.empty()) {
     gwnrt::MeshQualityReport quality;
-    gwnrt::SurfaceDistanceOptions distance_options;
+    gwnrt::SurfaceDistanceOptions distance_options = gwnrt::samples_for_output(out.triangles.size());
     distance_options.level = options.level;
     // A soup's corners, and the copies a UV seam splits off, are welded by position: the
     // topology is the surface's, not the texture's.

@@ -631,6 +631,36 @@ TEST(MeshQualityDistances, TheGridsPathsAgree) {
   EXPECT_NEAR(a.hausdorff_from_surface, u.hausdorff_from_surface, 1e-6);
 }
 
+TEST(MeshQualityDistances, SamplesFollowTheOutputsSize) {
+  SurfaceDistanceOptions full;
+  full.output_samples = 1000;
+  full.vertex_samples = 0;  // none stays none
+  full.surface_rays = 250;
+  full.sheet_samples = 333;
+  full.seed = 9;
+  full.level = 0.25f;
+  for (const size_t triangles : {kFullSampleTriangles, 10 * kFullSampleTriangles}) {
+    const SurfaceDistanceOptions o = samples_for_output(triangles, full);
+    EXPECT_EQ(o.output_samples, 1000u);
+    EXPECT_EQ(o.surface_rays, 250u);
+    EXPECT_EQ(o.sheet_samples, 333u);
+  }
+  const SurfaceDistanceOptions half = samples_for_output(kFullSampleTriangles / 2, full);
+  EXPECT_EQ(half.output_samples, 500u);
+  EXPECT_EQ(half.vertex_samples, 0u);
+  EXPECT_EQ(half.surface_rays, 125u);
+  EXPECT_EQ(half.sheet_samples, 167u);  // rounded up
+  EXPECT_EQ(half.seed, 9u);
+  EXPECT_EQ(half.level, 0.25f);
+  for (const size_t triangles : {size_t(0), size_t(12), kFullSampleTriangles / 20}) {
+    const SurfaceDistanceOptions tenth = samples_for_output(triangles, full);
+    EXPECT_EQ(tenth.output_samples, 100u);
+    EXPECT_EQ(tenth.surface_rays, 25u);
+    EXPECT_EQ(tenth.sheet_samples, 34u);
+  }
+  EXPECT_EQ(samples_for_output(kFullSampleTriangles).output_samples, SurfaceDistanceOptions{}.output_samples);
+}
+
 TEST(MeshQualityDistances, RefusesModelsWithoutMatchingSheetsAndBadInput) {
   const SphereFixture f;
   const SurfaceMesh out = to_surface(f.mesh);

@@ -1044,6 +1044,17 @@ Status mesh_quality_report_unguarded(const GwnModel& model, const SurfaceMesh& m
 
 }  // namespace
 
+SurfaceDistanceOptions samples_for_output(size_t output_triangles, const SurfaceDistanceOptions& full) {
+  const double share = std::clamp(double(output_triangles) / double(kFullSampleTriangles), 0.1, 1.0);
+  const auto scaled = [&](uint32_t count) { return uint32_t(std::ceil(share * double(count))); };
+  SurfaceDistanceOptions out = full;
+  out.output_samples = scaled(full.output_samples);
+  out.vertex_samples = scaled(full.vertex_samples);
+  out.surface_rays = scaled(full.surface_rays);
+  out.sheet_samples = scaled(full.sheet_samples);
+  return out;
+}
+
 // Each entry's arrays reuse their large blocks while it runs (base/host_blocks.h).
 Status mesh_topology(const SurfaceMesh& mesh, MeshTopology& out, bool weld_equal_positions) {
   return guard_status("mesh_topology", [&] {
