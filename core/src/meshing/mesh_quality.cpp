@@ -86,7 +86,8 @@ void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
   size_t size = 16;
   while (size < 2 * n) size *= 2;  // at most half full: a probe ends within a few slots
   const size_t mask = size - 1;
-  HostVector<uint32_t> table(size, kEmpty), slot_of(n);
+  HostVector<uint32_t> table(size, kEmpty);
+  HostVector<size_t> slot_of(n);  // the table has up to 2^33 slots
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       size_t slot = position_hash(pos[i]) & mask;
@@ -99,7 +100,7 @@ void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
         }
         break;
       }
-      slot_of[i] = uint32_t(slot);
+      slot_of[i] = slot;
     }
   });
   // A position's first vertex numbers it; the others take its number.
