@@ -1,5 +1,5 @@
-// Union-find over 32-bit ids, shared by the mesher's host code (the quality report's components,
-// the attribute transfer's UV charts).
+// Union-find over 32-bit ids, shared by the mesher's host code (the quality report's components
+// and fans, the attribute transfer's UV charts).
 #pragma once
 
 #include <atomic>
@@ -16,7 +16,10 @@ namespace gwnrt {
 // depend on the order of the unions.
 class DisjointSets {
  public:
-  explicit DisjointSets(size_t n) : parent_(n) {
+  explicit DisjointSets(size_t n) { reset(n); }
+  // n singletons again, keeping the storage (many small sets in a row: a vertex's corners).
+  void reset(size_t n) {
+    parent_.resize(n);
     for (size_t i = 0; i < n; ++i) parent_[i] = uint32_t(i);
   }
   uint32_t find(uint32_t x) {

@@ -79,7 +79,7 @@ inline uint64_t position_hash(const vec3& p) {
 }
 
 // By an open-addressing table of the vertices, filled in parallel: a slot holds the smallest
-// vertex at its position (a sort of the positions cost four times as much).
+// vertex at its position (the sort of the positions it replaced cost about three times as much).
 void weld_positions(const std::vector<vec3>& pos, WeldedPositions& out) {
   const size_t n = pos.size();
   constexpr uint32_t kEmpty = ~uint32_t(0);
@@ -204,7 +204,7 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vertex_count, 1024), [&](const tbb::blocked_range<size_t>& r) {
     Counts& c = counts.local();
     std::vector<Neighbour> around;
-    std::vector<uint32_t> fan;
+    DisjointSets fan(0);
     for (size_t v = r.begin(); v != r.end(); ++v) {
       const uint32_t first = start[v], count = start[v + 1] - first;
       if (count == 0) {
@@ -212,22 +212,17 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
         continue;
       }
       around.clear();
-      fan.resize(count);
+      fan.reset(count);
       for (uint32_t j = 0; j < count; ++j) {
         const uint32_t corner = corners[first + j], t = corner / 3, k = corner % 3;
         around.push_back({tris[t][(k + 1) % 3], j, true});
         around.push_back({tris[t][(k + 2) % 3], j, false});
-        fan[j] = j;
       }
       std::sort(around.begin(), around.end());
-      auto fan_root = [&](uint32_t j) {
-        while (fan[j] != j) j = fan[j] = fan[fan[j]];
-        return j;
-      };
       for (size_t g = 0; g < around.size();) {
         size_t e = g + 1;
         while (e < around.size() && around[e].vertex == around[g].vertex) ++e;
-        for (size_t m = g + 1; m < e; ++m) fan[fan_root(around[m].corner)] = fan_root(around[g].corner);
+        for (size_t m = g + 1; m < e; ++m) fan.unite(around[g].corner, around[m].corner);
         if (around[g].vertex > v) {
           const size_t on_edge = e - g;
           if (on_edge == 1) ++c.boundary;
@@ -239,7 +234,7 @@ Status mesh_topology_unguarded(const SurfaceMesh& mesh, MeshTopology& out, bool 
         g = e;
       }
       uint32_t fans = 0;
-      for (uint32_t j = 0; j < count; ++j) fans += fan[j] == j ? 1 : 0;
+      for (uint32_t j = 0; j < count; ++j) fans += fan.find(j) == j ? 1 : 0;
       if (fans > 1) ++c.non_manifold_vertices;
     }
   });
