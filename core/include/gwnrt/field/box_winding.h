@@ -296,10 +296,10 @@ GWNRT_HD inline float taylor_estimate(const TaylorPoint& p, const BoxFieldBounds
 }
 
 // Whether the first-order estimate from p may leave some point of `box` unsettled: the range of
-// ŵ(p) + ∇w(p)·(x − p) over the box, widened by the largest reach, holds a level w* + n for some
-// whole n (J is a whole number).
+// ŵ(p) + ∇w(p)·(x − p) over the box, widened by the largest reach (unless `widened` is false: the
+// estimate's own range), holds a level w* + n for some whole n (J is a whole number).
 GWNRT_HD inline bool taylor_may_leave_unsettled(const TaylorPoint& p, const BoxFieldBounds& b, const vec3& centre,
-                                                const Aabb& box, float level) {
+                                                const Aabb& box, float level, bool widened = true) {
   float lo = p.w_hat, hi = p.w_hat, r2 = 0.0f;
   for (int a = 0; a < 3; ++a) {
     const float d0 = box.lo[a] - centre[a], d1 = box.hi[a] - centre[a];
@@ -307,7 +307,7 @@ GWNRT_HD inline bool taylor_may_leave_unsettled(const TaylorPoint& p, const BoxF
     hi += max_of(p.gradient[a] * d0, p.gradient[a] * d1);
     r2 += max_of(d0 * d0, d1 * d1);
   }
-  const float reach = detail::taylor_reach(p, b, sqrtf(r2));
+  const float reach = widened ? detail::taylor_reach(p, b, sqrtf(r2)) : 0.0f;
   // A level w* + n in [lo − reach, hi + reach]: floor(hi + reach − w*) >= ceil(lo − reach − w*).
   return floorf(hi + reach - level) >= ceilf(lo - reach - level);
 }

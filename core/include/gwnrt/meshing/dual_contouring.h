@@ -124,6 +124,11 @@ inline void taylor_points(const ModelView& model, const vec3* x, const int* axis
 }
 #endif
 
+// Blocks the scout takes at once (ScoutQuery::may_meet_batch): eight blocks' children.
+inline constexpr int kScoutBatch = 64;
+// A block's first-order centres (ScoutQuery, BlockWindingPass): its own and its eighths'.
+inline constexpr int kBlockWindingPoints = 1 + 8;
+
 // Whether S may meet the box [lo, hi]: a sheet meets it, or a lower bound on the distance from
 // its centre to the level set is not above its half-diagonal. S lies on the sheets (or on M, when the sheets were
 // classified for another level or inexactly) and on the level set of φ off M (level_set_distance_bound).
@@ -137,10 +142,12 @@ struct ScoutQuery {
   // all of it: with the exact method and a cone, where the corners take the same bounds.
   bool settle_by_bounds = false;
 
-  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool by_bounds = false) const {
+  // With by_eighths (the finest level) a block its own estimate leaves unsettled may be settled
+  // eighth by eighth (settled_by_bounds).
+  GWNRT_HD bool may_meet(const vec3& lo, const vec3& hi, bool by_bounds = false, bool by_eighths = false) const {
     const Nearness n = nearness({lo, hi});
     if (n != Nearness::kLevelSet) return n == Nearness::kSheet;
-    return !(by_bounds && settle_by_bounds && settled_by_bounds({lo, hi}));
+    return !(by_bounds && settle_by_bounds && settled_by_bounds({lo, hi}, by_eighths));
   }
 
   // The distance tests alone: a sheet (or M) meeting the block, else S farther than the block's
@@ -158,13 +165,42 @@ struct ScoutQuery {
   }
 
   // No sheet within the block (the caller's distance), and ŵ's range over it holds no w* + n:
-  // w = ŵ − J_M with J_M a whole number, so w ≠ w* off M, and on M S is sheets alone.
-  GWNRT_HD bool settled_by_bounds(const Aabb& block) const {
+  // w = ŵ − J_M with J_M a whole number, so w ≠ w* off M, and on M S is sheets alone. With
+  // by_eighths, where the block's estimate leaves some of it unsettled, each eighth is settled by
+  // the block's estimate or by its own centre's (at kEighthPointBeta, with its own bounds), as
+  // BlockWindingPass settles corners: half the blocks kept by a scan's rims held no vertex.
+  GWNRT_HD bool settled_by_bounds(const Aabb& block, bool by_eighths = false) const {
     const BlockRayChoice ray = choose_block_ray(model, block);
     if (!ray.bounds.usable) return false;
     TaylorPoint p;
-    return taylor_point(model, block.centre(), ray.axis, ray.sign, p) &&
-           !taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level);
+    if (!taylor_point(model, block.centre(), ray.axis, ray.sign, p)) return false;
+    if (!taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level)) return true;
+    // Where the estimate itself crosses a level, S most likely meets the block: no eighths.
+    if (!by_eighths || taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level, false)) return false;
+    Aabb boxes[kBlockWindingPoints];
+    BoxFieldBounds bounds[kBlockWindingPoints];
+    block_and_eighths(block, boxes);
+    box_field_bounds(model, boxes, ray.axis, ray.sign, bounds);
+    for (int i = 1; i < kBlockWindingPoints; ++i) {
+      if (!taylor_may_leave_unsettled(p, ray.bounds, block.centre(), boxes[i], level)) continue;
+      TaylorPoint q;
+      if (!bounds[i].usable || !taylor_point(model, boxes[i].centre(), ray.axis, ray.sign, q, kEighthPointBeta) ||
+          taylor_may_leave_unsettled(q, bounds[i], boxes[i].centre(), boxes[i], level))
+        return false;
+    }
+    return true;
+  }
+
+  // boxes[0] the block, boxes[1 + i] its eighth i (index x + 2y + 4z), split at its centre.
+  GWNRT_HD static void block_and_eighths(const Aabb& block, Aabb (&boxes)[kBlockWindingPoints]) {
+    const vec3 c = block.centre();
+    boxes[0] = block;
+    for (int i = 0; i < 8; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const bool upper = (i >> a) & 1;
+        boxes[1 + i].lo[a] = upper ? c[a] : block.lo[a];
+        boxes[1 + i].hi[a] = upper ? block.hi[a] : c[a];
+      }
   }
 
 #if GWNRT_HOST_LANES && defined(__AVX__)
@@ -172,11 +208,15 @@ struct ScoutQuery {
   // as batches (taylor_points). With `bounds_first` (the finest level, where the level set's
   // bound dropped 164 of the scan's 11,672 blocks and the first-order bounds 7,601) the bounds
   // are asked before the level set's distance, which only the blocks they leave take.
+  // With `bounds_first` the eighths too (settled_by_bounds' by_eighths), their centres in
+  // batches of 64 points. Up to kScoutBatch blocks: the children of eight neighbouring blocks,
+  // whose centres share a traversal (a point cost 2.6 times as much in batches of eight).
   void may_meet_batch(const Aabb* blocks, int n, bool* out, bool bounds_first = false) const {
-    vec3 centre[8]{};
-    int axis[8]{}, pending[8]{}, count = 0;
-    float sign[8]{};
-    BoxFieldBounds bounds[8];
+    vec3 centre[kScoutBatch]{};
+    int axis[kScoutBatch]{}, pending[kScoutBatch]{}, count = 0;
+    float sign[kScoutBatch]{};
+    Aabb boxes[kScoutBatch][kBlockWindingPoints];
+    BoxFieldBounds bounds[kScoutBatch][kBlockWindingPoints];
     for (int k = 0; k < n; ++k) {
       const Nearness near = nearness(blocks[k], bounds_first && settle_by_bounds);
       out[k] = near != Nearness::kFar;
@@ -186,20 +226,62 @@ struct ScoutQuery {
         out[k] = !bounds_first || level_set_keeps(blocks[k]);
         continue;
       }
+      block_and_eighths(blocks[k], boxes[count]);
       centre[count] = blocks[k].centre();
       axis[count] = ray.axis;
       sign[count] = ray.sign;
-      bounds[count] = ray.bounds;
+      bounds[count][0] = ray.bounds;
       pending[count++] = k;
     }
-    TaylorPoint p[8];
-    bool ok[8];
-    taylor_points<8>(model, centre, axis, sign, count, p, ok);
+    TaylorPoint p[kScoutBatch];
+    bool ok[kScoutBatch];
+    taylor_points<kScoutBatch>(model, centre, axis, sign, count, p, ok);
+    // Per pending block: settled whole (1), to be settled by eighths (2), or kept (0).
+    int state[kScoutBatch];
+    constexpr int kMids = 8 * kScoutBatch;
+    vec3 mid_centre[kMids];
+    int mid_axis[kMids], mid_of[kMids], mid_count = 0;
+    float mid_sign[kMids];
     for (int j = 0; j < count; ++j) {
-      const Aabb& block = blocks[pending[j]];
-      out[pending[j]] = !(ok[j] && !taylor_may_leave_unsettled(p[j], bounds[j], centre[j], block, level)) &&
-                        (!bounds_first || level_set_keeps(block));
+      state[j] = !ok[j] ? 0 : (!taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][0], level) ? 1 : 2);
+      if (state[j] != 2) continue;
+      // Where the estimate itself crosses a level, S most likely meets the block: kept, no eighths.
+      if (!bounds_first || taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][0], level, false)) {
+        state[j] = 0;
+        continue;
+      }
+      // The eighths' bounds along the block's ray (the block's own kept: the same ray's).
+      const BoxFieldBounds block_bounds = bounds[j][0];
+      box_field_bounds(model, boxes[j], axis[j], sign[j], bounds[j]);
+      bounds[j][0] = block_bounds;
+      const int first = mid_count;
+      for (int i = 1; i < kBlockWindingPoints && state[j] == 2; ++i) {
+        if (!taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][i], level)) continue;
+        if (!bounds[j][i].usable) {
+          state[j] = 0;
+          mid_count = first;
+          break;
+        }
+        mid_centre[mid_count] = boxes[j][i].centre();
+        mid_axis[mid_count] = axis[j];
+        mid_sign[mid_count] = sign[j];
+        mid_of[mid_count++] = kBlockWindingPoints * j + i;
+      }
     }
+    for (int first = 0; first < mid_count; first += 64) {  // taylor_points takes 64 at most
+      const int run = mid_count - first < 64 ? mid_count - first : 64;
+      TaylorPoint mid[64];
+      bool mid_ok[64];
+      taylor_points<64>(model, mid_centre + first, mid_axis + first, mid_sign + first, run, mid, mid_ok,
+                        kEighthPointBeta);
+      for (int m = 0; m < run; ++m) {
+        const int j = mid_of[first + m] / kBlockWindingPoints, i = mid_of[first + m] % kBlockWindingPoints;
+        if (!mid_ok[m] || taylor_may_leave_unsettled(mid[m], bounds[j][i], mid_centre[first + m], boxes[j][i], level))
+          state[j] = 0;
+      }
+    }
+    for (int j = 0; j < count; ++j)
+      out[pending[j]] = state[j] == 0 && (!bounds_first || level_set_keeps(blocks[pending[j]]));
   }
 #endif
 };
@@ -281,7 +363,6 @@ inline constexpr bool kBatchedConeSums = false;
 // eight corners of a 2³ eighth's eighth: such centres cost more than they saved.) The block's
 // ray is the first of the six axis directions, nearest exit first, whose swept box holds no ∂M
 // (else the nearest exit's). A corner takes the finer centre that holds it.
-inline constexpr int kBlockWindingPoints = 1 + 8;
 struct BlockWinding {
   BoxFieldBounds bounds[9];  // the block, its eighths (index x + 2y + 4z)
   uint32_t mid = 0;          // bit i: point[1 + i] computed
@@ -350,14 +431,21 @@ struct BlockWindingPass {
   }
 
   // After the block's centre (w.block): the eighths whose centres are wanted, where the block's
-  // estimate leaves corners unsettled (their bounds set).
+  // estimate leaves corners unsettled (their bounds set), among those that hold a corner some
+  // block reads (a neighbour's slot is read on its lower faces alone).
   GWNRT_HD uint32_t wanted_eighths(uint64_t slot, const GridCoord& b) const {
     BlockWinding& w = out[slot];
     const Aabb block = block_box(b);
     const vec3 centre = block.centre();
     if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, block, level)) return 0;
     uint32_t wanted = 0;
+    const uint32_t needed_from = view.needed_from[slot];
     for (int i = 0; i < 8; ++i) {
+      // Eighth i holds a corner with local coordinate 0 along axis a only where bit a of i is 0;
+      // block b − d reads the corners of b at 0 along each axis of d (corner_needed).
+      bool read = false;
+      for (uint32_t d = 0; d < 8; ++d) read = read || (((needed_from >> d) & 1u) && (d & uint32_t(i)) == 0);
+      if (!read) continue;
       const Aabb mid = eighth_box(b, i);
       if (w.block && !taylor_may_leave_unsettled(w.point[0], w.bounds[0], centre, mid, level)) continue;
       if (!w.bounds[0].usable) w.bounds[1 + i] = box_field_bounds(model, mid, w.axis, w.sign);
@@ -936,10 +1024,14 @@ struct WalkBatchPass {
 #endif
 
 // Per slot, after HermitePass with defer_roots: the searches of its edges' smooth roots
-// (root_deferred) stepped together, each step's points as one batch of ribbon sums at
+// (root_deferred) stepped together, each step's points as one batch of ribbon sums with ∇w at
 // kRootSearchConeBeta (RibbonWindingBatch; M's jumps ahead along the slot's ray from each
-// point's own walk), a point the batch is unsure of by winding_number_crossing as the
-// search one by one takes it. The normals stay deferred (NormalBatchPass).
+// point's own walk), a point the batch is unsure of by winding_number_crossing as the search
+// one by one takes it. ∂w along the edge is the search's slope (its next point Newton's), and ∇w
+// at its last point the root's normal (kHermiteNormalBeta is the same beta): on the scan the
+// normals' own batches had cost a quarter of the roots'. A root whose last value the batch was
+// unsure of keeps its normal deferred (NormalBatchPass).
+static_assert(kHermiteNormalBeta == kRootSearchConeBeta, "the roots' ∇w is their normals'");
 struct RootBatchPass {
   SparseGridView view;
   ModelView model;
@@ -967,14 +1059,16 @@ struct RootBatchPass {
     slot_edges(edges, edge_count, slot, first, end);
 #if GWNRT_HOST_LANES && defined(__AVX__)
     const CornerRay ray = corner_ray(view, model, winding, block_winding, uint32_t(slot));
-    RibbonWindingBatch<kBlockItems> batch;
+    RibbonWindingBatch<kBlockItems, true> batch;
     uint64_t index[kBlockItems];
     IllinoisBracket bracket[kBlockItems];
+    vec3 gradient[kBlockItems];  // ∇w at each bracket's last point, or NaN
     for (uint64_t i = first; i < end;) {
       int count = 0;
       for (; i < end && count < int(kBlockItems); ++i)
         if (hermite[i].root_deferred) {
           bracket[count] = edge_bracket(i);
+          gradient[count] = vec3(__builtin_nanf(""));
           index[count++] = i;
         }
       int active[kBlockItems];
@@ -991,15 +1085,28 @@ struct RootBatchPass {
         const bool batched = batch.count >= kMinBatch;
         if (batched) batch.evaluate(model.ribbons, kRootSearchConeBeta, ray.axis, ray.sign);
         for (int a = 0; a < batch.count; ++a) {
+          const int j = active[a];
           const vec3& x = point[a];
           // The jumps' walks only where the batch has a value.
           const float w_hat = batched ? batch.winding(a) : __builtin_nanf("");
-          bracket[active[a]].take(
-              w_hat == w_hat ? batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - level
-                             : root_search_value(model, x, level));
+          gradient[j] = w_hat == w_hat ? batch.winding_gradient(a) : vec3(__builtin_nanf(""));
+          if (w_hat == w_hat)
+            bracket[j].take(batch.crossing_winding(a, jumps_ahead(model.triangles, x, ray.axis, ray.sign)) - level,
+                            gradient[j][int(edges[index[j]] % 4)]);
+          else
+            bracket[j].take(root_search_value(model, x, level));
         }
       }
-      for (int j = 0; j < count; ++j) finish(index[j], bracket[j]);
+      for (int j = 0; j < count; ++j) {
+        finish(index[j], bracket[j]);
+        // The normal from ∇w at the search's last point, within kRootTolerance of the edge from
+        // the root.
+        if (gradient[j].x == gradient[j].x) {
+          HermitePoint& p = hermite[index[j]];
+          p.normal = smooth_normal(gradient[j], p.normal);
+          p.normal_deferred = false;
+        }
+      }
     }
 #else
     for (uint64_t i = first; i < end; ++i) {
@@ -1039,7 +1146,7 @@ struct RootBatchPass {
   }
 };
 
-// Per slot, after HermitePass with defer_normals: the normals of its edges' smooth roots
+// Per slot, after RootBatchPass: the normals of its edges' smooth roots still deferred
 // (normal_deferred) from one batched traversal of the ribbon tree for all of them (∇w, the
 // Biot–Savart sum over ∂M: RibbonWindingBatch); a root the batch is unsure of takes smooth_root_gradient.
 struct NormalBatchPass {

@@ -118,10 +118,14 @@ struct IllinoisBracket {
     if (steps > 0) previous = t, f_previous = ft;
     return t = u;
   }
-  GWNRT_HD void take(float f) {
+  // f at t, and df/dt there where known (∂w along the edge: then the next point is Newton's).
+  GWNRT_HD void take(float f, float df = __builtin_nanf("")) {
     ft = f;
-    // The local slope: the secant through the last two values, or the guess's.
-    if (steps > 0 && t != previous) slope = (f - f_previous) / (t - previous);
+    // The local slope: df, else the secant through the last two values, or the guess's.
+    if (df == df && df != 0.0f)
+      slope = df;
+    else if (steps > 0 && t != previous)
+      slope = (f - f_previous) / (t - previous);
     const float local = slope == slope && slope != 0.0f ? fabsf(slope) : fabsf(fb - fa) / (tb - ta);
     if (fabsf(f) <= kRootTolerance * h * local || fabsf(f) <= kRootValueTolerance) {
       ta = tb = t;

@@ -221,25 +221,28 @@ Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& sc
     uint64_t count = 0;
 #if GWNRT_HOST_LANES && defined(__AVX__)
     if (level <= kScoutBoundLevel && scout.settle_by_bounds) {
-      // Eight candidates at a time (a kept block's children), their centres' sums as batches.
+      // kScoutBatch candidates at a time (the children of neighbouring kept blocks: consecutive
+      // in the kept order), their centres' sums as batches.
       typename Backend::template Array<uint8_t> meets;
       meets.resize(candidates.size());
       uint8_t* m = meets.data();
       const uint64_t n = candidates.size();
-      backend.parallel_for((n + 7) / 8, [=](uint64_t g) {
-        Aabb boxes[8];
-        bool out[8];
-        int count8 = 0;
-        uint64_t index[8];
-        for (uint64_t i = 8 * g; i < n && i < 8 * g + 8; ++i) {
-          m[i] = 0;
-          if (!inside(c[i])) continue;
-          index[count8] = i;
-          boxes[count8++] = box(c[i]);
-        }
-        scout.may_meet_batch(boxes, count8, out, level == 0);
-        for (int k = 0; k < count8; ++k) m[index[k]] = out[k];
-      });
+      backend.parallel_for((n + kScoutBatch - 1) / kScoutBatch,
+                           [=](uint64_t g) {
+                             Aabb boxes[kScoutBatch];
+                             bool out[kScoutBatch];
+                             int count_in = 0;
+                             uint64_t index[kScoutBatch];
+                             for (uint64_t i = kScoutBatch * g; i < n && i < kScoutBatch * (g + 1); ++i) {
+                               m[i] = 0;
+                               if (!inside(c[i])) continue;
+                               index[count_in] = i;
+                               boxes[count_in++] = box(c[i]);
+                             }
+                             scout.may_meet_batch(boxes, count_in, out, level == 0);
+                             for (int k = 0; k < count_in; ++k) m[index[k]] = out[k];
+                           },
+                           1);
       count = compact(
           backend, c, n, [=](uint64_t i) { return m[i] != 0; }, kept);
     } else
@@ -249,7 +252,7 @@ Status scout_blocks(Backend& backend, const MeshGrid& grid, const ScoutQuery& sc
           [=] GWNRT_PASS(uint64_t i) {
             if (!inside(c[i])) return false;
             const Aabb b = box(c[i]);
-            return scout.may_meet(b.lo, b.hi, level <= kScoutBoundLevel);
+            return scout.may_meet(b.lo, b.hi, level <= kScoutBoundLevel, level == 0);
           },
           kept);
     if (Status s = budget.reserve(count * sizeof(GridCoord) * (level > 0 ? 9 : 1), "scouting"); !s.ok()) return s;
