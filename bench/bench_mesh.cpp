@@ -448,7 +448,7 @@ int main(int argc, char** argv) try {
       ->delimiter(',')
       ->check(CLI::Range(1u, 1u << 16))
       ->capture_default_str();
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::thread_count());
   app.add_option("--samples", settings.samples, "output samples and rays on S of the distance measurements")
       ->check(CLI::Range(1u, 1u << 30))
       ->capture_default_str();

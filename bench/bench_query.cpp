@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   app.add_option("--beta", beta, "accuracy scale")->check(gwnrt::apps::positive_number());
   app.add_option("--brute-seconds", brute_seconds, "time budget of the brute-force baseline")
       ->check(gwnrt::apps::positive_number());
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::thread_count());
   app.add_option("--seed", seed, "random seed of the point mix");
   std::string only;
   app.add_option("--only", only, "time only the modes whose name contains this (e.g. distance)");

@@ -245,7 +245,7 @@ int main(int argc, char** argv) {
   app.add_option("--brute-seconds", brute_seconds,
                  "time budget of the brute-force tracer per mesh (it stops after the rays started by then)")
       ->check(gwnrt::apps::positive_number());
-  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::positive_number());
+  app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::thread_count());
   app.add_option("--eps", options.epsilon, "stopping distance relative to the box diagonal")
       ->check(gwnrt::apps::trace_epsilon_number());
   app.add_option("--beta", options.beta, "accuracy scale of gwnrt's multipole evaluation")

@@ -175,7 +175,9 @@ int main(int argc, char** argv) {
       ->type_name("B")
       ->capture_default_str()
       ->check(gwnrt::apps::trace_beta_number());
-  app.add_option("--threads", threads, "CPU threads (default: all)")->type_name("N");
+  app.add_option("--threads", threads, "CPU threads (default: all)")
+      ->type_name("N")
+      ->check(gwnrt::apps::thread_count());
   std::string device = "cpu";
   int64_t frames = 1;
   app.add_option("--device", device, std::string("First hit: ") + gwnrt::apps::kDeviceHelp)
@@ -206,7 +208,6 @@ int main(int argc, char** argv) {
   }
   if (elevation < -90.0 || elevation > 90.0) return fail("--elevation must lie in [-90, 90] degrees");
   if (!(fov > 0.0 && fov < 180.0)) return fail("--fov must lie in (0, 180) degrees");
-  if (app.count("--threads") && threads < 1) return fail("--threads must be at least 1");
 
   const std::string description = command_line(argc, argv);
   if (integrator == "path") {

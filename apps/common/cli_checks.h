@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "gwnrt/base/option_limits.h"
 #include "gwnrt/io/mesh_io.h"
 #include "gwnrt/trace/trace_types.h"
 
@@ -51,6 +52,13 @@ inline void add_weld_tolerance_option(CLI::App& app, double& tolerance) {
                  "default 0: only bit-identical positions)")
       ->check(number_check([](double v) { return v >= 0 && v <= kMaxWeldTolerance; }, "a number in [0, 0.01]",
                            "in [0, 0.01]"));
+}
+
+// --threads: a whole number in [1, kMaxThreads] (option_limits.h).
+inline CLI::Validator thread_count() {
+  const std::string range = "[1, " + std::to_string(kMaxThreads) + "]";
+  return number_check([](double v) { return v >= 1 && v <= double(kMaxThreads) && v == std::floor(v); },
+                      "a whole number in " + range, "in " + range);
 }
 
 inline CLI::Validator positive_number() {

@@ -406,7 +406,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 16384));
   app.add_option("--image-height", image_height, "and height")->capture_default_str()->check(CLI::Range(1, 16384));
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(apps::positive_number());
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(apps::thread_count());
   app.add_option("--against", against, "The second backend: cuda, or cpu to check this program without a GPU")
       ->capture_default_str()
       ->check(CLI::IsMember({"cuda", "cpu"}));

@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
                "Leave the vertices where dual contouring puts them: skip the exact search for intersecting "
                "triangles and their repair (faster; the output may then intersect itself)");
   app.add_option("--attributes", attributes, "Per-vertex attributes to carry from the input: source,uv,color");
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::positive_number());
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::thread_count());
   app.add_option("--device", device, gwnrt::apps::kDeviceHelp)
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));

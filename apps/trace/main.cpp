@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   app.add_option("--device", device, gwnrt::apps::kDeviceHelp)
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::positive_number());
+  app.add_option("--threads", threads, "CPU threads (default: all)")->check(gwnrt::apps::thread_count());
   app.add_option("-o,--output", output_path, "CSV output file ('-' for stdout)")->capture_default_str();
   app.add_flag("-v,--verbose", verbose,
                "Print the summary even when stderr is not a terminal, and what welding by position changed");

@@ -7,7 +7,7 @@ mesh where it separates inside from outside, smooth caps over its holes.
 
 Inputs: float32 C-contiguous arrays are used in place; anything else (float64, lists, strided
 views) is converted to float32 once. Every batch runs in C++ with the GIL released, on all cores
-or on ``threads=`` TBB workers. Bad input raises ``ValueError`` with the C++ library's message (the
+or on ``threads=`` TBB workers (0 to 1024; 0 or None: all cores). Bad input raises ``ValueError`` with the C++ library's message (the
 point, face or option at fault); unreadable files ``OSError``; allocations ``MemoryError``; other
 failures ``RuntimeError``. ``device="cuda"`` (or ``"auto"``) runs the batch on the GPU where the
 module was built with the CUDA backend and one is usable.

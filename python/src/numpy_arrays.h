@@ -18,6 +18,7 @@
 #include <tbb/task_arena.h>
 
 #include "gwnrt/base/hd.h"
+#include "gwnrt/base/option_limits.h"
 #include "gwnrt/base/status.h"
 
 namespace gwnrt::python {
@@ -86,10 +87,10 @@ T checked_integer(int64_t value, const char* name, T lo = std::numeric_limits<T>
 using Threads = std::optional<int64_t>;
 
 // Runs fn with the GIL released, on at most `threads` TBB workers when given (> 0; 0 or None:
-// all cores). Throws ValueError for a negative count.
+// all cores). Throws ValueError for a count outside [0, kMaxThreads].
 template <class Fn>
 auto run_released(Threads threads, Fn&& fn) {
-  const int workers = threads ? checked_integer<int>(*threads, "threads", 0, INT_MAX) : 0;
+  const int workers = threads ? checked_integer<int>(*threads, "threads", 0, int(kMaxThreads)) : 0;
   py::gil_scoped_release release;
   if (workers > 0) {
     tbb::task_arena arena(workers);

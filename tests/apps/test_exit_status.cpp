@@ -30,6 +30,15 @@ TEST(ProgramExitStatus, RefusedCommandLinesExitAsTheProgramsOwnChecksDo) {
     const test::RunResult value = test::run_program(binary, "--threads zero");
     ASSERT_TRUE(value.exited) << name;
     EXPECT_EQ(value.exit_code, refused) << name << ": " << value.err;
+    // More threads than kMaxThreads (ten million took 1.3 GB; a billion failed as "out of
+    // memory", naming no option), none and a fraction: refused by the option's range, at once.
+    for (const char* threads : {"--threads 1025", "--threads 1000000000", "--threads 0", "--threads 2.5"}) {
+      const test::RunResult many = test::run_program(binary, threads);
+      ASSERT_TRUE(many.exited) << name << " " << threads;
+      EXPECT_EQ(many.exit_code, refused) << name << " " << threads << ": " << many.err;
+      EXPECT_NE(many.err.find("--threads"), std::string::npos) << name << " " << threads << ": " << many.err;
+      EXPECT_NE(many.err.find("[1, 1024]"), std::string::npos) << name << " " << threads << ": " << many.err;
+    }
     const test::RunResult help = test::run_program(binary, "--help");
     ASSERT_TRUE(help.exited) << name;
     EXPECT_EQ(help.exit_code, 0) << name << ": " << help.err;

@@ -1,0 +1,15 @@
+// The ranges of numeric options that the programs, the Python module and the C API share,
+// checked where each is given (docs/programs.md lists them with the others').
+#pragma once
+
+#include <cstdint>
+
+namespace gwnrt {
+
+// Worker threads: 0 (or none given) for all cores, else at most this many. TBB makes a thread
+// and a stack for each worker it is allowed: ten million asked for took 1.3 GB, and 2^31 − 1
+// crashed inside TBB.
+inline constexpr int64_t kMaxThreads = 1024;
+inline bool threads_valid(int64_t threads) { return threads >= 0 && threads <= kMaxThreads; }
+
+}  // namespace gwnrt
