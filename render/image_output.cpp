@@ -17,6 +17,8 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include "gwnrt/io/output_file.h"
+
 namespace gwnrt::render {
 
 namespace {
@@ -27,18 +29,14 @@ float srgb_encode(float linear) {
   return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-// Writes `bytes` to `path`, checking the write, the flush and the close: a full disk is often
-// reported only by the last two.
+// Writes `bytes` to `path` whole or not at all (ReplacingFile: beside it, then renamed over it),
+// checking the write, the flush and the close: a full disk is often reported only by the last two.
 Status write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
+  ReplacingFile out(path);
+  if (Status s = out.open(); !s.ok()) return s;
   errno = 0;
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f) return {StatusCode::kIoError, path + ": cannot open for writing: " + std::strerror(errno ? errno : EIO)};
-  int error = 0;
-  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) error = errno ? errno : EIO;
-  if (std::fflush(f) != 0 && error == 0) error = errno ? errno : EIO;
-  if (std::fclose(f) != 0 && error == 0) error = errno ? errno : EIO;
-  if (error != 0) return {StatusCode::kIoError, path + ": write failed: " + std::strerror(error)};
-  return Status::Ok();
+  const bool written = bytes.empty() || std::fwrite(bytes.data(), 1, bytes.size(), out.file()) == bytes.size();
+  return out.commit(written ? 0 : (errno ? errno : EIO));
 }
 
 std::vector<uint8_t> encode_srgb8(const Image& image) {

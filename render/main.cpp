@@ -22,6 +22,7 @@
 #include "apps/common/device_choice.h"
 #include "apps/common/program.h"
 #include "apps/common/trace_level.h"
+#include "gwnrt/io/output_file.h"
 #include "gwnrt/query/validation.h"
 #include "render/image_output.h"
 #include "render/integrators/first_hit.h"
@@ -72,6 +73,7 @@ std::optional<std::string> check_output_path(const char* option, const std::stri
 std::optional<std::string> resolve_output_path(std::string& path, const std::string& input) {
   const bool default_output = path.empty();
   if (default_output) path = (fs::path("out") / fs::path(input).stem()).string() + ".png";
+  if (gwnrt::Status s = gwnrt::check_output_is_not_input(path, {input}); !s.ok()) return "-o: " + s.message();
   return check_output_path("-o", path, default_output);
 }
 

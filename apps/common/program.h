@@ -1,6 +1,7 @@
 // What every gwnrt program does the same way: report a fatal error as "program: message" on
-// stderr with exit status 1, check a benchmark's input files up front, and limit TBB to
-// --threads workers (0 = all cores).
+// stderr with exit status 1, check a benchmark's input files up front, refuse an output that
+// would overwrite an input, write an output whole or not at all, and limit TBB to --threads
+// workers (0 = all cores).
 #pragma once
 
 #include <cstddef>
@@ -13,6 +14,8 @@
 #include <vector>
 
 #include <tbb/global_control.h>
+
+#include "gwnrt/io/output_file.h"
 
 namespace gwnrt::apps {
 
@@ -35,6 +38,44 @@ inline std::string first_bad_input_file(const std::vector<std::string>& paths) {
     return path + (std::filesystem::exists(path, ec) ? ": not a regular file" : ": no such file");
   }
   return {};
+}
+
+// An output option and its path ("" or "-" for none, or stdout).
+struct OutputOption {
+  const char* option;
+  std::string path;
+};
+
+// The first output that is the same file as one of `inputs` (check_output_is_not_input), or the
+// same path or file as another output, as "option: message"; "" when none is. Checked before
+// any work: `gwnrt-mesh X.obj -o X.obj` had overwritten its input and exited 0.
+inline std::string first_output_clash(const std::vector<OutputOption>& outputs,
+                                      const std::vector<std::string>& inputs) {
+  const auto given = [](const std::string& p) { return !p.empty() && p != "-"; };
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    if (!given(outputs[i].path)) continue;
+    if (Status s = check_output_is_not_input(outputs[i].path, inputs); !s.ok())
+      return std::string(outputs[i].option) + ": " + s.message();
+    for (size_t j = 0; j < i; ++j) {
+      if (!given(outputs[j].path)) continue;
+      std::error_code a, b;
+      const bool same = std::filesystem::weakly_canonical(outputs[i].path, a) ==
+                            std::filesystem::weakly_canonical(outputs[j].path, b) ||
+                        std::filesystem::equivalent(outputs[i].path, outputs[j].path, a);
+      if (same)
+        return std::string(outputs[i].option) + ": " + outputs[i].path + " is also the " + outputs[j].option +
+               " output; give each output its own path";
+    }
+  }
+  return {};
+}
+
+// Writes `text` to `path` whole or not at all (ReplacingFile).
+inline Status write_text_file(const std::string& path, const std::string& text) {
+  ReplacingFile out(path);
+  if (Status s = out.open(); !s.ok()) return s;
+  const bool written = std::fwrite(text.data(), 1, text.size(), out.file()) == text.size();
+  return out.commit(written ? 0 : EIO);
 }
 
 // Caps TBB's parallelism for as long as it lives; workers() is the cap in force (the core count

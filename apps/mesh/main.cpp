@@ -183,6 +183,10 @@ int main(int argc, char** argv) {
   if (const auto status = gwnrt::apps::parse_command_line(app, argc, argv)) return *status;
   const bool chatty = verbose || ::isatty(2) == 1;
 
+  if (const std::string clash = gwnrt::apps::first_output_clash(
+          {{"--output", output_path}, {"--report-json", report_json_path}}, {mesh_path});
+      !clash.empty())
+    return fail(kProgram, clash);
   if (resolution) options.resolution = *resolution;
   if (cell_size) options.cell_size = *cell_size;
   options.repair_self_intersections = !no_repair;
@@ -282,11 +286,8 @@ int main(int argc, char** argv) {
     const nlohmann::json j = report_json(stats, quality, mesh_seconds, out.positions.size(), out.triangles.size());
     if (report) print_report(j);
     if (!report_json_path.empty()) {
-      std::FILE* f = std::fopen(report_json_path.c_str(), "wb");
-      const std::string text = j.dump(2) + "\n";
-      const bool ok = f && std::fwrite(text.data(), 1, text.size(), f) == text.size();
-      if (f && std::fclose(f) != 0) return fail(kProgram, report_json_path + ": write error");
-      if (!ok) return fail(kProgram, report_json_path + ": cannot write the report");
+      if (Status w = gwnrt::apps::write_text_file(report_json_path, j.dump(2) + "\n"); !w.ok())
+        return fail(kProgram, w.message());
     }
   }
   if (stats.open_edges)

@@ -233,6 +233,9 @@ int main(int argc, char** argv) {
                "Print the load/build summary even when stderr is not a terminal (the progress bar needs one)");
 
   if (const auto status = gwnrt::apps::parse_command_line(app, argc, argv)) return *status;
+  if (const std::string clash = gwnrt::apps::first_output_clash({{"--output", output_path}}, {mesh_path, points_path});
+      !clash.empty())
+    return fail(kProgram, clash);
 
   uint32_t fields = 0;
   std::vector<bool> selected(std::size(kFields), false);
@@ -358,13 +361,17 @@ int main(int argc, char** argv) {
   }
 
   const bool to_stdout = output_path == "-";
-  std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
-  if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
+  gwnrt::ReplacingFile file(to_stdout ? std::string() : output_path);
+  if (!to_stdout)
+    if (gwnrt::Status s = file.open(); !s.ok()) return fail(kProgram, s.message());
+  std::FILE* out = to_stdout ? stdout : file.file();
   CsvWriter csv(out);
   write_csv(csv, selected, points, results, report.origin);
-  bool ok = csv.flush();
-  ok = (std::fflush(out) == 0) && ok;
-  if (!to_stdout) ok = (std::fclose(out) == 0) && ok;
-  if (!ok) return fail(kProgram, (to_stdout ? std::string("<stdout>") : output_path) + ": write error");
+  const bool ok = csv.flush();
+  if (!to_stdout) {
+    if (gwnrt::Status s = file.commit(ok ? 0 : EIO); !s.ok()) return fail(kProgram, s.message());
+  } else if (!ok || std::fflush(out) != 0) {
+    return fail(kProgram, "<stdout>: write error");
+  }
   return 0;
 }

@@ -125,6 +125,9 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose,
                "Print the summary even when stderr is not a terminal, and what welding by position changed");
   if (const auto status = gwnrt::apps::parse_command_line(app, argc, argv)) return *status;
+  if (const std::string clash = gwnrt::apps::first_output_clash({{"--output", output_path}}, {mesh_path, rays_path});
+      !clash.empty())
+    return fail(kProgram, clash);
 
   gwnrt::apps::set_trace_surface(mode, level, options);
   if (Status s = gwnrt::validate_trace_options(options); !s.ok()) return fail(kProgram, s.message());
@@ -209,13 +212,17 @@ int main(int argc, char** argv) {
                  kProgram, capped);
 
   const bool to_stdout = output_path == "-";
-  std::FILE* out = to_stdout ? stdout : std::fopen(output_path.c_str(), "wb");
-  if (!out) return fail(kProgram, output_path + ": cannot open for writing: " + std::strerror(errno));
+  gwnrt::ReplacingFile file(to_stdout ? std::string() : output_path);
+  if (!to_stdout)
+    if (gwnrt::Status s = file.open(); !s.ok()) return fail(kProgram, s.message());
+  std::FILE* out = to_stdout ? stdout : file.file();
   CsvWriter csv(out);
   write_csv(csv, hits, origin);
-  bool ok = csv.flush();
-  ok = (std::fflush(out) == 0) && ok;
-  if (!to_stdout) ok = (std::fclose(out) == 0) && ok;
-  if (!ok) return fail(kProgram, (to_stdout ? std::string("<stdout>") : output_path) + ": write error");
+  const bool ok = csv.flush();
+  if (!to_stdout) {
+    if (gwnrt::Status s = file.commit(ok ? 0 : EIO); !s.ok()) return fail(kProgram, s.message());
+  } else if (!ok || std::fflush(out) != 0) {
+    return fail(kProgram, "<stdout>: write error");
+  }
   return 0;
 }

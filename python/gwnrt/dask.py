@@ -255,7 +255,8 @@ def extract_surfaces(paths: Sequence, out_dir, *, format: str = "ply", threads: 
     """Meshes S of every file as one Dask bag task per file (on the active distributed client when
     there is one), writing OUT_DIR/<name>.<format>; returns one report per file, in order: path,
     output, seconds, vertices, triangles, watertight, manifold, closed_manifold, and error (None,
-    or why that file failed: the others go on). options: those of gwnrt.Model.extract_surface."""
+    or why that file failed: the others go on). options: those of gwnrt.Model.extract_surface.
+    Raises ValueError, before any work, where an output would be one of the inputs."""
     if format not in ("ply", "obj", "stl"):
         raise ValueError(f"format must be 'ply', 'obj' or 'stl', got '{format}'")
     out_dir = os.fspath(out_dir)
@@ -269,6 +270,14 @@ def extract_surfaces(paths: Sequence, out_dir, *, format: str = "ply", threads: 
             name = f"{stem}-{copy}"
         taken.add(name)
         jobs.append((path, os.path.join(out_dir, f"{name}.{format}")))
+    # An output on one of the inputs (OUT_DIR the inputs' folder, or a link to one) would destroy
+    # it: refused before any task runs.
+    inputs = [path for path, _ in jobs if os.path.exists(path)]
+    for _, output in jobs:
+        for path in inputs:
+            if os.path.exists(output) and os.path.samefile(output, path):
+                raise ValueError(f"{output}: the output is the input {path} (the same file), which writing it "
+                                 f"would destroy; choose another out_dir")
     if not jobs:
         return []
     bag = db.from_sequence(jobs, npartitions=len(jobs))

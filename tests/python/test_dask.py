@@ -152,6 +152,23 @@ def test_extract_surfaces_reports_each_file(client, tmp_path):
     assert "broken.obj" in reports[1]["error"] and reports[1]["error"].startswith("ValueError")
 
 
+def test_extract_surfaces_never_overwrites_an_input(client, tmp_path):
+    # Into the inputs' own folder in their format, or where another input has the output's name
+    # (x.obj's output x.ply is the input x.ply): refused before any task, every input intact.
+    shutil.copy(BUNNY_HOLES, tmp_path / "holes.obj")
+    shutil.copy(BUNNY_HOLES, tmp_path / "x.obj")
+    (tmp_path / "x.ply").write_bytes(b"not a mesh, but the user's file")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    for paths, fmt, clash in (([tmp_path / "holes.obj"], "obj", "holes.obj"),
+                              ([tmp_path / "x.obj", tmp_path / "x.ply"], "ply", "x.ply")):
+        with pytest.raises(ValueError, match=f"the output is the input .*{clash}"):
+            gd.extract_surfaces(paths, tmp_path, format=fmt, resolution=16)
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    # Elsewhere it writes.
+    (report,) = gd.extract_surfaces([tmp_path / "holes.obj"], tmp_path / "out", format="obj", resolution=16)
+    assert report["error"] is None and os.path.exists(report["output"])
+
+
 def test_threaded_scheduler_without_a_client():
     # No distributed client in this test's scope: dask's default threaded scheduler.
     model = gwnrt.load(BUNNY_HOLES)

@@ -18,6 +18,7 @@
 
 #include "base/message.h"
 #include "gwnrt/io/mesh_writer.h"
+#include "gwnrt/io/output_file.h"
 #include "io/text.h"
 
 namespace gwnrt {
@@ -32,23 +33,16 @@ class OutFile {
   // with margin.
   static constexpr size_t kMaxRecord = 256;
 
-  explicit OutFile(std::string path) : path_(std::move(path)) {}
+  explicit OutFile(std::string path) : out_(std::move(path)) {}
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  ~OutFile() {
-    if (!f_) return;
-    std::fclose(f_);
-    // Only reached when close() did not succeed (an error, or an exception unwinding): a
-    // truncated OBJ would otherwise pass for a smaller mesh. A device or pipe is left alone.
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(path_, ec)) std::filesystem::remove(path_, ec);
-  }
-
+  // Beside the destination until close() (ReplacingFile): a failed or interrupted write, or one
+  // never closed (an exception unwinding), leaves an existing file as it was, and a truncated OBJ
+  // never passes for a smaller mesh.
   Status open() {
-    errno = 0;
-    f_ = std::fopen(path_.c_str(), "wb");
-    if (!f_) return {StatusCode::kIoError, cat(path_, ": cannot open for writing: ", errno_text(errno))};
+    if (Status s = out_.open(); !s.ok()) return s;
+    f_ = out_.file();
     buf_.resize(size_t(1) << 20);
     return Status::Ok();
   }
@@ -70,24 +64,11 @@ class OutFile {
     }
   }
 
-  // Flushes and closes, checking both: fclose reports errors of writes the kernel deferred
-  // (a full disk, a network file system).
+  // Flushes, closes and puts the file in place, checking each step.
   Status close() {
     flush();
-    std::FILE* f = f_;
     f_ = nullptr;
-    errno = 0;
-    const bool closed = std::fclose(f) == 0;
-    if (!failed_ && !closed) {
-      failed_ = true;
-      err_ = errno;
-    }
-    if (failed_) {
-      std::error_code ec;
-      if (std::filesystem::is_regular_file(path_, ec)) std::filesystem::remove(path_, ec);
-      return {StatusCode::kIoError, cat(path_, ": write failed: ", errno_text(err_))};
-    }
-    return Status::Ok();
+    return out_.commit(failed_ ? (err_ ? err_ : EIO) : 0);
   }
 
  private:
@@ -102,7 +83,7 @@ class OutFile {
     used_ = 0;  // after a failure the rest is dropped; close() reports it
   }
 
-  std::string path_;
+  ReplacingFile out_;
   std::FILE* f_ = nullptr;
   std::vector<char> buf_;
   size_t used_ = 0;
