@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
   uint32_t seed = 1;
   app.add_option("mesh", mesh_path, "OBJ or PLY mesh (default: the bundled bunny with holes)");
   app.add_option("--points", count, "number of query points")->check(gwnrt::apps::positive_number());
-  app.add_option("--beta", beta, "accuracy scale")->check(gwnrt::apps::positive_number());
+  app.add_option("--beta", beta, "accuracy scale")->check(gwnrt::apps::beta_number());
   app.add_option("--brute-seconds", brute_seconds, "time budget of the brute-force baseline")
       ->check(gwnrt::apps::positive_number());
   app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::thread_count());

@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
   app.add_option("--points", count, "sample points around S")->check(gwnrt::apps::positive_number());
   app.add_option("--seed", seed, "random seed (points and lines)");
   app.add_option("--level", level, "the level w* of S = ∂{w > w*}");
-  app.add_option("--beta", beta, "accuracy scale of the multipole evaluation")->check(gwnrt::apps::positive_number());
+  app.add_option("--beta", beta, "accuracy scale of the multipole evaluation")->check(gwnrt::apps::beta_number());
   app.add_option("--threads", threads, "worker threads (default: all cores)")->check(gwnrt::apps::thread_count());
   app.add_option("--cloud", cloud_target, "points on the smooth pieces for the reference")
       ->check(gwnrt::apps::positive_number());

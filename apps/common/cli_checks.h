@@ -84,10 +84,12 @@ inline CLI::Validator trace_epsilon_number() {
   return number_check([](double v) { return trace_epsilon_valid(float(v)); },
                       "a number in (0, 1), not 0 or 1 as a float (a share of the mesh's box diagonal)", "in (0, 1)");
 }
-inline CLI::Validator trace_beta_number() {
-  return number_check([](double v) { return trace_beta_valid(float(v)); },
-                      "a finite number > 0, not 0 or inf as a float", "> 0");
+// Beta, the multipole accuracy scale (beta_valid, option_limits.h): gwnrt-query's too.
+inline CLI::Validator beta_number() {
+  return number_check([](double v) { return beta_valid(float(v)); }, "a finite number >= 1, not inf as a float",
+                      ">= 1");
 }
+inline CLI::Validator trace_beta_number() { return beta_number(); }
 // A step or crossing cap: a whole number the uint32_t it is stored in holds, at least 1.
 inline CLI::Validator trace_cap_number() {
   return number_check(

@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({0, 1, 2}));
   app.add_option("--beta", beta, "Accuracy parameter: expand a cluster when |x - p| > beta * radius")
       ->capture_default_str()
-      ->check(gwnrt::apps::positive_number());
+      ->check(gwnrt::apps::beta_number());
   CLI::Option* method_option =
       app.add_option("--method", method_name,
                      "How w, grad and hess are evaluated (and the sdf's sign, sdf1, sdf2, proj): crossing (exact: "

@@ -257,6 +257,7 @@ TEST_F(QueryCliTest, BadArgumentsFailWithMessage) {
       {base + " --order 3", "--order"},
       {base + " --beta -1", "beta"},
       {base + " --beta 0", "beta"},
+      {base + " --beta 0.5", "--beta: must be a finite number >= 1"},  // inside a cluster's own ball
       {base + " --fields w,curl", "curl"},
       {base + " --device tpu", "--device"},
       {base + " --threads 0", "--threads"},

@@ -80,6 +80,9 @@ TEST(EmbreePlugin, BadGeometryArgumentsAreRefused) {
       {"epsilon 0", [](GWNRTOptions& o) { o.epsilon = 0; }, "epsilon"},
       {"epsilon < 0", [](GWNRTOptions& o) { o.epsilon = -1e-5f; }, "epsilon"},
       {"beta NaN", [](GWNRTOptions& o) { o.beta = std::numeric_limits<float>::quiet_NaN(); }, "beta"},
+      // Below 1 a cluster is expanded inside its own ball: wrong hits, once accepted.
+      {"beta 0.1", [](GWNRTOptions& o) { o.beta = 0.1f; }, "beta must be a finite number >= 1"},
+      {"beta 0.999", [](GWNRTOptions& o) { o.beta = 0.999f; }, "beta"},
       {"level NaN", [](GWNRTOptions& o) { o.level = std::numeric_limits<float>::quiet_NaN(); }, "level"},
       {"mode 7", [](GWNRTOptions& o) { o.mode = static_cast<GWNRTMode>(7); }, "mode"},
       {"max_steps 0", [](GWNRTOptions& o) { o.max_steps = 0; }, "cap"},

@@ -165,16 +165,23 @@ def test_bad_options(model, points32):
         (dict(method="bogus"), "method must be 'auto', 'crossing', 'taylor' or 'brute', got 'bogus'"),
         (dict(method="taylor", order=3), "Taylor order must be 0, 1 or 2, got 3"),
         (dict(method="taylor", order=-1), "Taylor order must be 0, 1 or 2, got -1"),
-        (dict(beta=0.0), "beta must be a finite number > 0"),
-        (dict(beta=-2.0), "beta must be a finite number > 0"),
-        (dict(beta=float("nan")), "beta must be a finite number > 0"),
-        (dict(beta=float("inf")), "beta must be a finite number > 0"),
+        (dict(beta=0.0), "beta must be a finite number >= 1"),
+        (dict(beta=-2.0), "beta must be a finite number >= 1"),
+        (dict(beta=0.1), "beta must be a finite number >= 1"),  # gave w 0.35 where the exact is -0.019
+        (dict(beta=0.999), "beta must be a finite number >= 1"),
+        (dict(beta=float("nan")), "beta must be a finite number >= 1"),
+        (dict(beta=float("inf")), "beta must be a finite number >= 1"),
     ]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=re.escape(message)):
             model.winding_number(p, **kwargs)
         with pytest.raises(ValueError, match=re.escape(message)):
             model.query(p, ["gradient", "signed_distance"], **kwargs)
+    # The tracer and the mesher take the same range (beta 0.1 traced a smooth hit at t = 7.62
+    # where the sheet is at 5.56).
+    for call in (lambda: model.trace(p, [0.0, 0.0, 1.0], beta=0.5), lambda: model.extract_surface(8, beta=0.5)):
+        with pytest.raises(ValueError, match=r"beta must be a finite number >= 1 \(.*\), got 0\.5"):
+            call()
     with pytest.raises(ValueError, match="unknown field 'nope'"):
         model.query(p, ["w", "nope"])
     with pytest.raises(ValueError, match="fields must name at least one"):

@@ -46,6 +46,14 @@ inline std::string non_finite_coordinate(float x, float y, float z) {
              infinite ? std::string_view(": infinite, or beyond float's range (+-3.4e38)") : std::string_view());
 }
 
+// The refusal of an accuracy scale beta outside beta_valid (gwnrt/base/option_limits.h).
+inline std::string beta_refusal(float beta) {
+  return cat(
+      "accuracy scale beta must be a finite number >= 1 (clusters are expanded beyond beta radii, where "
+      "their series converge), got ",
+      beta);
+}
+
 // The system's words for an errno value (0: the call set none).
 inline std::string errno_text(int err) {
   return err ? std::error_code(err, std::generic_category()).message() : std::string("unknown error");

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include "base/message.h"
+#include "gwnrt/base/option_limits.h"
 #include "gwnrt/meshing/attribute_transfer.h"
 #include "meshing/host_backend.h"
 
@@ -31,9 +33,10 @@ Status validate_options(const MeshingOptions& o) {
     return {StatusCode::kInvalidArgument, "meshing: the method must be dual contouring or marching cubes"};
   if (uint32_t(o.winding.method) >= kWindingMethodCount)
     return {StatusCode::kInvalidArgument, "meshing: unknown winding method"};
-  if (o.winding.taylor.order < 0 || o.winding.taylor.order > 2 || !(o.winding.taylor.beta > 0.0f) ||
-      !std::isfinite(o.winding.taylor.beta))
-    return {StatusCode::kInvalidArgument, "meshing: Taylor order must be 0, 1 or 2 and beta finite and > 0"};
+  if (o.winding.taylor.order < 0 || o.winding.taylor.order > 2)
+    return {StatusCode::kInvalidArgument, "meshing: Taylor order must be 0, 1 or 2"};
+  if (!beta_valid(o.winding.taylor.beta))
+    return {StatusCode::kInvalidArgument, "meshing: " + beta_refusal(o.winding.taylor.beta)};
   if (o.attributes & ~uint32_t(kAttributeSource | kAttributeUv | kAttributeColor))
     return {StatusCode::kInvalidArgument, "meshing: unknown attribute flags (source, uv and color exist)"};
   return Status::Ok();

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "base/message.h"
+#include "gwnrt/base/option_limits.h"
 
 namespace gwnrt {
 
@@ -35,8 +36,7 @@ Status validate_request(const QueryRequest& request, const ModelView* view) {
   if (request.taylor.order < 0 || request.taylor.order > 2)
     return {StatusCode::kInvalidArgument,
             "Taylor order must be 0, 1 or 2, got " + std::to_string(request.taylor.order)};
-  if (!(request.taylor.beta > 0.0f) || !(request.taylor.beta < kInfinity))
-    return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
+  if (!beta_valid(request.taylor.beta)) return {StatusCode::kInvalidArgument, beta_refusal(request.taylor.beta)};
   if (!std::isfinite(request.level)) return {StatusCode::kInvalidArgument, "level w* must be a finite number"};
   const NewtonOptions& n = request.newton;
   if (!(n.tolerance > 0.0f) || !(n.max_step > 0.0f) || !(n.mesh_fraction > 0.0f && n.mesh_fraction <= 1.0f) ||
@@ -64,8 +64,7 @@ Status validate_trace_options(const TraceOptions& options) {
   if (!trace_level_valid(options.level)) return {StatusCode::kInvalidArgument, "trace level must be a finite number"};
   if (!trace_epsilon_valid(options.epsilon))
     return {StatusCode::kInvalidArgument, "trace epsilon must lie in (0, 1) (it is relative to the box diagonal)"};
-  if (!trace_beta_valid(options.beta))
-    return {StatusCode::kInvalidArgument, "accuracy scale beta must be a finite number > 0"};
+  if (!trace_beta_valid(options.beta)) return {StatusCode::kInvalidArgument, beta_refusal(options.beta)};
   if (!trace_cap_valid(options.max_steps) || !trace_cap_valid(options.max_crossings))
     return {StatusCode::kInvalidArgument, "step and crossing caps must be at least 1"};
   return Status::Ok();

@@ -50,7 +50,7 @@ typedef struct GWNRTOptions {
   float epsilon;              /* stopping distance relative to the mesh's box diagonal, default 1e-5 */
   unsigned int max_steps;     /* Harnack steps per ray, default 4096 (a ray reaching it misses) */
   unsigned int max_crossings; /* triangle crossings per ray, default 65536 */
-  float beta;                 /* multipole accuracy scale, default 2 (larger: slower, more accurate) */
+  float beta;                 /* multipole accuracy scale >= 1, default 2 (larger: slower, more accurate) */
 } GWNRTOptions;
 
 /* Copies xyz (3 floats per vertex) and triangles (3 indices per triangle) and builds. */

@@ -33,7 +33,7 @@ Status validate_request(const QueryRequest& request, const ModelView* view = nul
 // as a closed mesh).
 Status validate_trace_view(const ModelView& view);
 
-// Level finite, epsilon and beta finite and > 0, caps > 0.
+// Level finite, epsilon in (0, 1), beta finite and >= 1 (beta_valid), caps > 0.
 Status validate_trace_options(const TraceOptions& options);
 
 }  // namespace gwnrt

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "gwnrt/base/hd.h"
+#include "gwnrt/base/option_limits.h"
 #include "gwnrt/geometry/bvh.h"
 
 namespace gwnrt {
@@ -31,7 +32,7 @@ struct TraceOptions {
 // before anything is loaded (the library's own message cannot name a flag).
 inline bool trace_level_valid(float level) { return std::isfinite(level); }
 inline bool trace_epsilon_valid(float epsilon) { return epsilon > 0.0f && epsilon < 1.0f; }  // box diagonals
-inline bool trace_beta_valid(float beta) { return beta > 0.0f && beta < kInfinity; }
+inline bool trace_beta_valid(float beta) { return beta_valid(beta); }
 inline bool trace_cap_valid(uint32_t cap) { return cap >= 1; }  // max_steps, max_crossings
 
 enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
