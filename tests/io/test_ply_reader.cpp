@@ -63,6 +63,38 @@ TEST_F(TempFiles, SmallPlyAllEncodings) {
   }
 }
 
+// A header that declares fewer elements than the file holds is refused in every encoding (a
+// binary file had loaded as the partial mesh); a line break after binary data is not an element.
+TEST_F(TempFiles, PlyWithMoreDataThanDeclaredIsRefused) {
+  const Small ref;
+  int n = 0;
+  for (const std::string format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    SCOPED_TRACE(format);
+    std::string text = small_ply(format, ref.positions);
+    const size_t at = text.find("element edge 2");
+    ASSERT_NE(at, std::string::npos);
+    Mesh m;
+    ASSERT_TRUE(load_mesh(write("whole" + std::to_string(n++) + ".ply", text), m).ok());
+    if (format != "ascii") {
+      ASSERT_TRUE(load_mesh(write("newline" + std::to_string(n++) + ".ply", text + "\n"), m).ok());
+      expect_mesh(m, ref.positions, ref.triangles);
+      const Status junk = load_mesh(write("junk" + std::to_string(n++) + ".ply", text + std::string("\x01\0", 2)), m);
+      EXPECT_EQ(junk.code(), StatusCode::kParseError);
+      EXPECT_NE(junk.message().find("2 bytes of data after the last element declared"), std::string::npos)
+          << junk.message();
+    }
+    text.replace(at, 14, "element edge 1");  // the second edge, two ints, is undeclared
+    const std::string file = write("short" + std::to_string(n++) + ".ply", text);
+    const Status s = load_mesh(file, m);
+    EXPECT_EQ(s.code(), StatusCode::kParseError) << s.message();
+    EXPECT_NE(s.message().find(file), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("after the last element declared in the header"), std::string::npos) << s.message();
+    if (format != "ascii") {
+      EXPECT_NE(s.message().find("8 bytes of data"), std::string::npos) << s.message();
+    }
+  }
+}
+
 TEST_F(TempFiles, PlyIntegerCoordinates) {
   const Small ref;
   std::vector<vec3> pos;

@@ -341,7 +341,14 @@ struct BinarySource {
     return Res::kOk;
   }
 
-  bool only_whitespace_left() const { return true; }  // trailing bytes after binary data are tolerated
+  // A line break or spaces after the data (some writers end the file with one) and nothing else:
+  // more bytes are elements the header did not declare, which a reader that stopped at the
+  // count would drop without a word.
+  bool only_whitespace_left() const {
+    for (const unsigned char* q = p; q < end; ++q)
+      if (*q != '\n' && *q != '\r' && *q != ' ' && *q != '\t') return false;
+    return true;
+  }
 };
 
 struct AsciiSource {
@@ -562,6 +569,11 @@ Status read_ply_body(const std::string& path, Src& src, const PlyHeader& h, Mesh
     }
   }
   if (!src.only_whitespace_left()) {
+    if constexpr (!Src::kAscii)
+      return {StatusCode::kParseError,
+              cat(path, ": ", src.remaining(),
+                  " bytes of data after the last element declared in the header (it declares fewer elements than "
+                  "the file holds, or the file has data after them)")};
     return {StatusCode::kParseError, cat(src.where(path), ": unexpected data ", quoted_token(src.bad_tok),
                                          " after the last element declared in the header")};
   }
