@@ -174,6 +174,11 @@ py::dict trace(const PythonModel& p, const py::handle& origins_obj, const py::ha
     throw py::value_error("origins, directions, tnear and tfar must have the same number of rows, got " +
                           std::to_string(k) + ", " + std::to_string(directions.shape(0)) + ", " +
                           std::to_string(tnear.shape(0)) + " and " + std::to_string(tfar.shape(0)));
+  // Refused as the programs refuse them in a ray file, rather than traced as misses.
+  const std::span<const vec3> o_rows = as_vec3(origins), d_rows = as_vec3(directions);
+  for (size_t i = 0; i < k; ++i)
+    if (const char* why = ray_refusal(Ray{o_rows[i], d_rows[i], tnear.data()[i], tfar.data()[i]}))
+      throw py::value_error("ray " + std::to_string(i) + ": " + why);
   py::dict out;
   bool *hit, *capped, *invalid;
   float *t, *position, *normal;

@@ -3,6 +3,7 @@ brute force on closed meshes, and the first crossing of the numpy w with 1/2 sam
 that pass through the open cube's hole (the smooth cap)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -167,11 +168,21 @@ def test_trace_ray_arguments(open_cube_model):
     # One origin for many directions, and a scalar tfar.
     r = open_cube_model.trace([0.0, 0.0, 0.0], np.array([up, [0.0, 0.0, 2.0]]), tfar=10.0)
     assert r.hit.all() and r.t[1] == pytest.approx(r.t[0] / 2, rel=1e-3)
-    # Rejected rays are flagged, not raised: a zero direction, a NaN origin.
-    r = open_cube_model.trace([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0], [0.0, 0.0, 0.0]],
-                              [[0.0, 0.0, 0.0], up, up])
-    assert r.invalid.tolist() == [True, True, False]
-    assert r.hit.tolist() == [False, False, True] and np.isposinf(r.t[:2]).all()
+    # Rays the programs refuse in a ray file are refused here too, by index (they were traced as
+    # misses): a zero, NaN or infinite direction, a NaN origin, tnear not finite or above tfar.
+    o3, up3 = [[0.0, 0.0, 0.0]] * 3, [up] * 3
+    for origins, directions, near, far, why in (
+            (o3, [up, [0.0, 0.0, 0.0], up], 0.0, math.inf, "ray 1: direction is zero"),
+            (o3, [up, up, [0.0, np.nan, 1.0]], 0.0, math.inf, "ray 2: direction has a non-finite coordinate"),
+            (o3, [up, [np.inf, 0.0, 0.0], up], 0.0, math.inf, "ray 1: direction has a non-finite coordinate"),
+            ([[np.nan, 0.0, 0.0]] + o3[1:], up3, 0.0, math.inf, "ray 0: origin has a non-finite coordinate"),
+            (o3, up3, [0.0, 3.0, 0.0], [math.inf, 2.0, 1.0], "ray 1: tnear exceeds tfar"),
+            (o3, up3, [0.0, 0.0, -math.inf], math.inf, "ray 2: tnear is not a finite number"),
+            (o3, up3, 0.0, [1.0, np.nan, 1.0], "ray 1: tfar is NaN")):
+        with pytest.raises(ValueError, match=re.escape(why)):
+            open_cube_model.trace(origins, directions, tnear=near, tfar=far)
+    r = open_cube_model.trace(o3, up3, tnear=[0.0, 1.0, 2.0], tfar=[math.inf, 1.0, math.inf])  # tnear = tfar
+    assert not r.invalid.any() and r.hit.tolist() == [True, False, False]
     with pytest.raises(ValueError, match="origins has 2 rows"):
         open_cube_model.trace(np.zeros((2, 3)), np.ones((3, 3)))
     with pytest.raises(ValueError, match=r"tfar must be a number or have shape \(2,\)"):

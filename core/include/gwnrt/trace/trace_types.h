@@ -8,6 +8,7 @@
 #include "gwnrt/base/hd.h"
 #include "gwnrt/base/option_limits.h"
 #include "gwnrt/geometry/bvh.h"
+#include "gwnrt/geometry/ray.h"
 
 namespace gwnrt {
 
@@ -40,6 +41,22 @@ enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
 // The shortest ray direction traced: the smallest normal float (shorter ones, zero included,
 // cannot be normalised and are refused).
 inline constexpr float kMinDirectionLength = 1.17549435e-38f;
+
+// Why a ray cannot be traced, or nullptr: the rays the tracer marks invalid (SurfaceTracer), and
+// tnear not finite or above tfar, which the programs' ray files refuse too. A caller that refuses
+// such rays rather than flagging them (Python's trace) says this with the ray's index.
+inline const char* ray_refusal(const Ray& r) {
+  const auto finite = [](const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!finite(r.origin)) return "origin has a non-finite coordinate";
+  if (!finite(r.direction)) return "direction has a non-finite coordinate";
+  const double length = std::sqrt(double(r.direction.x) * r.direction.x + double(r.direction.y) * r.direction.y +
+                                  double(r.direction.z) * r.direction.z);
+  if (!(float(length) >= kMinDirectionLength)) return "direction is zero (or shorter than the smallest normal float)";
+  if (!std::isfinite(r.tnear)) return "tnear is not a finite number";
+  if (std::isnan(r.tfar)) return "tfar is NaN";
+  if (r.tnear > r.tfar) return "tnear exceeds tfar";
+  return nullptr;
+}
 
 // A ray whose origin lies more than this many box diagonals before the box's centre is traced
 // from its line's point across from the centre (SurfaceTracer): t steps there by 1.2e-7 of the
