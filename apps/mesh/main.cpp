@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <sstream>
@@ -211,7 +212,12 @@ int main(int argc, char** argv) {
   load_options.recentre = true;
   load_options.weld_tolerance = weld_tolerance;
   load_options.summarize_weld = verbose;
-  if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, {}, load_options); !s.ok())
+  // The sheets for the level meshed: the scout's exact bound and --report both read them (at 0.5
+  // alone, --report at any other level had failed after writing the mesh). A level the mesher
+  // refuses keeps the default, and the mesher says why.
+  gwnrt::BuildOptions build_options;
+  if (std::isfinite(options.level) && options.level != 0.0f) build_options.sheet_level = options.level;
+  if (Status s = gwnrt::apps::load_model(mesh_path, model, loaded, build_options, load_options); !s.ok())
     return fail(kProgram, s.message());
   if (chatty)
     std::fprintf(stderr, "%s: %s: %zu triangles, %zu boundary segments%s%s; loaded and built in %.3f s\n", kProgram,

@@ -248,5 +248,24 @@ TEST_F(MeshCliTest, RepairsIntersectingTrianglesUnlessAskedNotTo) {
   EXPECT_EQ(raw["triangles"], repaired["triangles"]);
 }
 
+// --report at a level other than 1/2: the sheets are classified for the level meshed (it had
+// exited 1 after writing the mesh, "the model's sheets were classified for level 0.5"). On the
+// bunny with holes the distances from S's samples to the output stay within a cell, as at 1/2.
+TEST_F(MeshCliTest, ReportsAtAnyLevel) {
+  for (const char* level : {"0.3", "0.5", "0.8"}) {
+    const std::string json = test::temp_path("level_report.json");
+    const test::RunResult r = test::run_program(
+        binary_, test::quote(test::data_path("bunny_holes.obj")) + " -o " + test::quote(test::temp_path("l.ply")) +
+                     " --resolution 32 --level " + level + " --report-json " + test::quote(json));
+    ASSERT_TRUE(r.exited && r.exit_code == 0) << level << ": " << r.err;
+    std::ifstream in(json);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    ASSERT_FALSE(j.is_discarded()) << level;
+    EXPECT_EQ(j["self_intersections"], 0u) << level;
+    EXPECT_GT(uint64_t(j["distances"]["surface_points"]), 100u) << level;
+    EXPECT_LT(double(j["distances"]["hausdorff_from_surface"]), double(j["cell_size"])) << level;
+  }
+}
+
 }  // namespace
 }  // namespace gwnrt
