@@ -249,7 +249,7 @@ int main(int argc, char** argv) {
   app.add_option("--eps", options.epsilon, "stopping distance relative to the box diagonal")
       ->check(gwnrt::apps::trace_epsilon_number());
   app.add_option("--beta", options.beta, "accuracy scale of gwnrt's multipole evaluation")
-      ->check(gwnrt::apps::trace_beta_number());
+      ->check(gwnrt::apps::beta_number());
   app.add_option("--level", options.level, "the level w* of S = ∂{w > w*}")->check(gwnrt::apps::trace_level_number());
   app.add_option("--check", check,
                  "after the timings, also trace with the brute force up to this many of the rays where (a) and (b) "

@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
   app.add_option("--beta", beta, "Accuracy of the multipole evaluation: expand a cluster beyond beta * radius")
       ->type_name("B")
       ->capture_default_str()
-      ->check(gwnrt::apps::trace_beta_number());
+      ->check(gwnrt::apps::beta_number());
   app.add_option("--threads", threads, "CPU threads (default: all)")
       ->type_name("N")
       ->check(gwnrt::apps::thread_count());

@@ -84,12 +84,11 @@ inline CLI::Validator trace_epsilon_number() {
   return number_check([](double v) { return trace_epsilon_valid(float(v)); },
                       "a number in (0, 1), not 0 or 1 as a float (a share of the mesh's box diagonal)", "in (0, 1)");
 }
-// Beta, the multipole accuracy scale (beta_valid, option_limits.h): gwnrt-query's too.
+// Beta, the multipole accuracy scale (beta_valid, option_limits.h): the tracer's and the queries'.
 inline CLI::Validator beta_number() {
   return number_check([](double v) { return beta_valid(float(v)); }, "a finite number >= 1, not inf as a float",
                       ">= 1");
 }
-inline CLI::Validator trace_beta_number() { return beta_number(); }
 // A step or crossing cap: a whole number the uint32_t it is stored in holds, at least 1.
 inline CLI::Validator trace_cap_number() {
   return number_check(

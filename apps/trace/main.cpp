@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
       ->check(gwnrt::apps::trace_cap_number());
   app.add_option("--beta", options.beta, "Accuracy of the multipole evaluation of w mod 1")
       ->capture_default_str()
-      ->check(gwnrt::apps::trace_beta_number());
+      ->check(gwnrt::apps::beta_number());
   app.add_flag("--exact", options.exact, "Evaluate w mod 1 by the brute-force double sum (slow reference)");
   app.add_option("--device", device, gwnrt::apps::kDeviceHelp)
       ->capture_default_str()

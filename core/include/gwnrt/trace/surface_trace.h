@@ -33,8 +33,6 @@ GWNRT_HD inline float cone_winding_number(const TriangleTreeView& cone, const ve
   return o.exact ? float(winding_number_exact(cone, x).w) : winding_number_taylor<2, false, false>(cone, x, o.beta).w;
 }
 
-GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
-
 // Accept: bool(const RayHit&), asked about every candidate hit in increasing t; the trace ends
 // at the first it accepts (an intersection filter turns candidates down).
 template <class Accept>
@@ -42,14 +40,11 @@ class SurfaceTracer {
  public:
   GWNRT_HD SurfaceTracer(const ModelView& m, const Ray& ray, const TraceOptions& o, Accept accept)
       : m_(m), o_(o), accept_(accept) {
-    const float len = float(glm::length(dvec3(ray.direction)));  // in float, |d|² under/overflows for finite d
-    // A direction whose length is below the smallest normal float cannot be normalised (1e-44
-    // gave t = inf for a hit): refused like a zero direction.
-    if (!finite3(ray.origin) || !finite3(ray.direction) || !(len >= kMinDirectionLength) || !is_finite(len) ||
-        is_nan(ray.tnear) || is_nan(ray.tfar)) {
+    if (untraceable_ray(ray)) {
       hit_.invalid = true;
       return;
     }
+    const float len = float(glm::length(dvec3(ray.direction)));  // as untraceable_ray takes it
     len_ = len;
     dir_ = ray.direction / len;
     const vec3 extent = m.bounds.hi - m.bounds.lo;

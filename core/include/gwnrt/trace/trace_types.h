@@ -42,18 +42,29 @@ enum class HitKind : uint32_t { kNone = 0, kSheet = 1, kSmooth = 2 };
 // cannot be normalised and are refused).
 inline constexpr float kMinDirectionLength = 1.17549435e-38f;
 
-// Why a ray cannot be traced, or nullptr: the rays the tracer marks invalid (SurfaceTracer), and
-// tnear not finite or above tfar, which the programs' ray files refuse too. A caller that refuses
-// such rays rather than flagging them (Python's trace) says this with the ray's index.
+GWNRT_HD inline bool finite3(const vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
+
+// Why the tracer cannot trace a ray (SurfaceTracer: its hit says invalid), or nullptr. A direction
+// whose length in float is below the smallest normal float cannot be normalised (1e-44 gave
+// t = inf for a hit): refused like a zero direction; |d| is taken in double, as |d|² under- and
+// overflows float for finite d.
+GWNRT_HD inline const char* untraceable_ray(const Ray& r) {
+  if (!finite3(r.origin)) return "origin has a non-finite coordinate";
+  if (!finite3(r.direction)) return "direction has a non-finite coordinate";
+  const float length = float(glm::length(dvec3(r.direction)));
+  if (!(length >= kMinDirectionLength)) return "direction is zero (or shorter than the smallest normal float)";
+  if (!is_finite(length)) return "direction is longer than float's range";
+  if (is_nan(r.tnear)) return "tnear is not a finite number";
+  if (is_nan(r.tfar)) return "tfar is NaN";
+  return nullptr;
+}
+
+// Why a ray is refused by a caller that refuses rather than flags (Python's trace, which says it
+// with the ray's index), or nullptr: untraceable_ray's, and tnear infinite or above tfar, as the
+// programs' ray files refuse them.
 inline const char* ray_refusal(const Ray& r) {
-  const auto finite = [](const vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-  if (!finite(r.origin)) return "origin has a non-finite coordinate";
-  if (!finite(r.direction)) return "direction has a non-finite coordinate";
-  const double length = std::sqrt(double(r.direction.x) * r.direction.x + double(r.direction.y) * r.direction.y +
-                                  double(r.direction.z) * r.direction.z);
-  if (!(float(length) >= kMinDirectionLength)) return "direction is zero (or shorter than the smallest normal float)";
-  if (!std::isfinite(r.tnear)) return "tnear is not a finite number";
-  if (std::isnan(r.tfar)) return "tfar is NaN";
+  if (const char* why = untraceable_ray(r)) return why;
+  if (!is_finite(r.tnear)) return "tnear is not a finite number";
   if (r.tnear > r.tfar) return "tnear exceeds tfar";
   return nullptr;
 }
