@@ -175,18 +175,38 @@ struct ScoutQuery {
     TaylorPoint p;
     if (!taylor_point(model, block.centre(), ray.axis, ray.sign, p)) return false;
     if (!taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level)) return true;
-    // Where the estimate itself crosses a level, S most likely meets the block: no eighths.
-    if (!by_eighths || taylor_may_leave_unsettled(p, ray.bounds, block.centre(), block, level, false)) return false;
     Aabb boxes[kBlockWindingPoints];
     BoxFieldBounds bounds[kBlockWindingPoints];
     block_and_eighths(block, boxes);
-    box_field_bounds(model, boxes, ray.axis, ray.sign, bounds);
-    for (int i = 1; i < kBlockWindingPoints; ++i) {
-      if (!taylor_may_leave_unsettled(p, ray.bounds, block.centre(), boxes[i], level)) continue;
+    uint32_t wanted;
+    if (!by_eighths || !eighths_to_settle(p, ray, boxes, bounds, wanted)) return false;
+    for (; wanted != 0; wanted &= wanted - 1) {
+      const int i = 1 + lowest_set_bit(wanted);
       TaylorPoint q;
-      if (!bounds[i].usable || !taylor_point(model, boxes[i].centre(), ray.axis, ray.sign, q, kEighthPointBeta) ||
+      if (!taylor_point(model, boxes[i].centre(), ray.axis, ray.sign, q, kEighthPointBeta) ||
           taylor_may_leave_unsettled(q, bounds[i], boxes[i].centre(), boxes[i], level))
         return false;
+    }
+    return true;
+  }
+
+  // For a block (boxes[0], its eighths after it: block_and_eighths) that the estimate p from its
+  // centre along `ray` leaves unsettled: the eighths whose own centres must settle them (bit i for
+  // boxes[1 + i]), their bounds along the ray in bounds[1...] (bounds[0] the ray's). False where
+  // the block is kept without trying: the estimate itself crosses a level (S most likely meets
+  // the block), or an eighth it leaves has no usable bounds.
+  GWNRT_HD bool eighths_to_settle(const TaylorPoint& p, const BlockRayChoice& ray,
+                                  const Aabb (&boxes)[kBlockWindingPoints],
+                                  BoxFieldBounds (&bounds)[kBlockWindingPoints], uint32_t& wanted) const {
+    const vec3 centre = boxes[0].centre();
+    if (taylor_may_leave_unsettled(p, ray.bounds, centre, boxes[0], level, false)) return false;
+    box_field_bounds(model, boxes, ray.axis, ray.sign, bounds);
+    bounds[0] = ray.bounds;
+    wanted = 0;
+    for (int i = 1; i < kBlockWindingPoints; ++i) {
+      if (!taylor_may_leave_unsettled(p, ray.bounds, centre, boxes[i], level)) continue;
+      if (!bounds[i].usable) return false;
+      wanted |= 1u << (i - 1);
     }
     return true;
   }
@@ -236,32 +256,21 @@ struct ScoutQuery {
     TaylorPoint p[kScoutBatch];
     bool ok[kScoutBatch];
     taylor_points<kScoutBatch>(model, centre, axis, sign, count, p, ok);
-    // Per pending block: settled whole (1), to be settled by eighths (2), or kept (0).
-    int state[kScoutBatch];
+    // Per pending block: kept, unless its estimate settles it whole or its eighths below do.
+    bool keep[kScoutBatch];
     constexpr int kMids = 8 * kScoutBatch;
     vec3 mid_centre[kMids];
     int mid_axis[kMids], mid_of[kMids], mid_count = 0;
     float mid_sign[kMids];
     for (int j = 0; j < count; ++j) {
-      state[j] = !ok[j] ? 0 : (!taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][0], level) ? 1 : 2);
-      if (state[j] != 2) continue;
-      // Where the estimate itself crosses a level, S most likely meets the block: kept, no eighths.
-      if (!bounds_first || taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][0], level, false)) {
-        state[j] = 0;
-        continue;
-      }
-      // The eighths' bounds along the block's ray (the block's own kept: the same ray's).
-      const BoxFieldBounds block_bounds = bounds[j][0];
-      box_field_bounds(model, boxes[j], axis[j], sign[j], bounds[j]);
-      bounds[j][0] = block_bounds;
-      const int first = mid_count;
-      for (int i = 1; i < kBlockWindingPoints && state[j] == 2; ++i) {
-        if (!taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][i], level)) continue;
-        if (!bounds[j][i].usable) {
-          state[j] = 0;
-          mid_count = first;
-          break;
-        }
+      keep[j] = !ok[j];
+      if (keep[j] || !taylor_may_leave_unsettled(p[j], bounds[j][0], centre[j], boxes[j][0], level)) continue;
+      uint32_t wanted;
+      keep[j] =
+          !bounds_first || !eighths_to_settle(p[j], {axis[j], sign[j], bounds[j][0]}, boxes[j], bounds[j], wanted);
+      if (keep[j]) continue;
+      for (; wanted != 0; wanted &= wanted - 1) {
+        const int i = 1 + lowest_set_bit(wanted);
         mid_centre[mid_count] = boxes[j][i].centre();
         mid_axis[mid_count] = axis[j];
         mid_sign[mid_count] = sign[j];
@@ -277,11 +286,10 @@ struct ScoutQuery {
       for (int m = 0; m < run; ++m) {
         const int j = mid_of[first + m] / kBlockWindingPoints, i = mid_of[first + m] % kBlockWindingPoints;
         if (!mid_ok[m] || taylor_may_leave_unsettled(mid[m], bounds[j][i], mid_centre[first + m], boxes[j][i], level))
-          state[j] = 0;
+          keep[j] = true;
       }
     }
-    for (int j = 0; j < count; ++j)
-      out[pending[j]] = state[j] == 0 && (!bounds_first || level_set_keeps(blocks[pending[j]]));
+    for (int j = 0; j < count; ++j) out[pending[j]] = keep[j] && (!bounds_first || level_set_keeps(blocks[pending[j]]));
   }
 #endif
 };
