@@ -70,12 +70,24 @@ inline std::string first_output_clash(const std::vector<OutputOption>& outputs,
   return {};
 }
 
-// Writes `text` to `path` whole or not at all (ReplacingFile).
-inline Status write_text_file(const std::string& path, const std::string& text) {
+// Writes an output by `write(FILE*)` (true when every write succeeded) to `path`, or to stdout
+// for "-"; a file whole or not at all (ReplacingFile).
+template <class Write>
+Status write_output(const std::string& path, Write&& write) {
+  if (path == "-") {
+    const bool ok = write(stdout);
+    if (!ok || std::fflush(stdout) != 0) return {StatusCode::kIoError, "<stdout>: write error"};
+    return Status::Ok();
+  }
   ReplacingFile out(path);
   if (Status s = out.open(); !s.ok()) return s;
-  const bool written = std::fwrite(text.data(), 1, text.size(), out.file()) == text.size();
-  return out.commit(written ? 0 : EIO);
+  const bool ok = write(out.file());
+  return out.commit(ok ? 0 : EIO);
+}
+
+// Writes `text` to `path` whole or not at all.
+inline Status write_text_file(const std::string& path, const std::string& text) {
+  return write_output(path, [&](std::FILE* f) { return std::fwrite(text.data(), 1, text.size(), f) == text.size(); });
 }
 
 // Caps TBB's parallelism for as long as it lives; workers() is the cap in force (the core count

@@ -360,18 +360,11 @@ int main(int argc, char** argv) {
                  gwnrt::device_name(where), t, t > 0 ? double(points.size()) / t * 1e-6 : 0.0);
   }
 
-  const bool to_stdout = output_path == "-";
-  gwnrt::ReplacingFile file(to_stdout ? std::string() : output_path);
-  if (!to_stdout)
-    if (gwnrt::Status s = file.open(); !s.ok()) return fail(kProgram, s.message());
-  std::FILE* out = to_stdout ? stdout : file.file();
-  CsvWriter csv(out);
-  write_csv(csv, selected, points, results, report.origin);
-  const bool ok = csv.flush();
-  if (!to_stdout) {
-    if (gwnrt::Status s = file.commit(ok ? 0 : EIO); !s.ok()) return fail(kProgram, s.message());
-  } else if (!ok || std::fflush(out) != 0) {
-    return fail(kProgram, "<stdout>: write error");
-  }
+  const auto csv_rows = [&](std::FILE* out) {
+    CsvWriter csv(out);
+    write_csv(csv, selected, points, results, report.origin);
+    return csv.flush();
+  };
+  if (gwnrt::Status s = gwnrt::apps::write_output(output_path, csv_rows); !s.ok()) return fail(kProgram, s.message());
   return 0;
 }
